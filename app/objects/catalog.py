@@ -1,0 +1,73 @@
+"""The category catalogue: `generate(category, seed)`, train/test seed splits, semantics lookup."""
+from __future__ import annotations
+
+import zlib
+from functools import lru_cache
+from typing import Callable
+
+import numpy as np
+import trimesh
+
+from app.objects import bottle, bowl, mug, vase
+from app.objects.semantics import Semantics
+
+Builder = Callable[[int, np.random.Generator], tuple[trimesh.Trimesh, Semantics]]
+BUILDERS: dict[str, Builder] = {"mug": mug.build, "bowl": bowl.build, "bottle": bottle.build, "vase": vase.build}
+RANGES: dict[str, dict[str, tuple[float, float]]] = {
+    "mug": mug.RANGES, "bowl": bowl.RANGES, "bottle": bottle.RANGES, "vase": vase.RANGES,
+}
+CATEGORIES: tuple[str, ...] = tuple(BUILDERS)
+IN_DOMAIN: tuple[str, ...] = ("mug", "bowl", "bottle")  # vases stay out of training data
+
+# Seed splits: disjoint integer ranges, the same for every category.
+TRAIN_SEEDS = range(0, 5000)
+TEST_SEEDS = range(100_000, 100_200)
+SPLITS = {"train": TRAIN_SEEDS, "test": TEST_SEEDS}
+
+
+def check_category(category: str) -> str:
+    """Return category if known, else raise a one-line ValueError listing the known ones."""
+    if category not in BUILDERS:
+        raise ValueError(f"unknown object category {category!r}; choose one of {', '.join(CATEGORIES)}")
+    return category
+
+
+def split(category: str, part: str) -> list[int]:
+    """Seeds of the 'train' or 'test' instances of a category (the two lists never overlap)."""
+    check_category(category)
+    if part not in SPLITS:
+        raise ValueError(f"unknown split {part!r}; choose 'train' or 'test'")
+    return list(SPLITS[part])
+
+
+def _rng(category: str, seed: int) -> np.random.Generator:
+    """Generator seeded by (category, seed), so seed 7 of 'mug' and of 'bowl' are unrelated."""
+    return np.random.default_rng(np.random.SeedSequence([int(seed), zlib.crc32(category.encode())]))
+
+
+@lru_cache(maxsize=256)
+def _build(category: str, seed: int) -> tuple[trimesh.Trimesh, Semantics]:
+    return BUILDERS[category](seed, _rng(category, seed))
+
+
+def generate(category: str, seed: int) -> trimesh.Trimesh:
+    """A watertight instance in its canonical frame; `semantics(mesh)` gives its landmarks.
+
+    Deterministic per (category, seed). The returned mesh is a fresh copy: transform it freely.
+    """
+    check_category(category)
+    if int(seed) != seed or seed < 0:
+        raise ValueError(f"seed must be a non-negative integer, got {seed!r}")
+    mesh, sem = _build(category, int(seed))
+    out = mesh.copy()
+    out.metadata["semantics"] = sem
+    out.metadata["name"] = f"{category}-{seed}"
+    return out
+
+
+def semantics(mesh: trimesh.Trimesh) -> Semantics:
+    """The semantic landmarks of a mesh made by `generate` (canonical frame)."""
+    sem = mesh.metadata.get("semantics")
+    if not isinstance(sem, Semantics):
+        raise ValueError("this mesh has no semantics: only meshes from app.objects.generate carry them")
+    return sem

@@ -1,0 +1,24 @@
+#!/usr/bin/env bash
+# Installs NIFT cell into ./.venv: the Debian libraries Open3D needs, then the package itself.
+# Usage: scripts/install.sh [--test]      (--test adds pytest)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+need_apt=()
+for pkg in libusb-1.0-0 libgl1 libgomp1; do
+    dpkg -s "$pkg" >/dev/null 2>&1 || need_apt+=("$pkg")
+done
+if [ ${#need_apt[@]} -gt 0 ]; then
+    sudo_cmd=""; [ "$(id -u)" -ne 0 ] && sudo_cmd="sudo"
+    echo "installing Debian packages: ${need_apt[*]}"
+    $sudo_cmd apt-get update -qq
+    DEBIAN_FRONTEND=noninteractive $sudo_cmd apt-get install -y -qq "${need_apt[@]}" >/dev/null
+fi
+
+[ -x .venv/bin/python ] || python3 -m venv .venv
+.venv/bin/python -m pip install -q --upgrade pip
+# torch first and exactly pinned, so nothing later can pull a CUDA build.
+.venv/bin/python -m pip install -q "torch==2.13.0"
+extra=""; [ "${1:-}" = "--test" ] && extra="[test]"
+.venv/bin/python -m pip install -q -e ".${extra}"
+echo "NIFT cell installed in .venv ($(.venv/bin/nift --version))"
