@@ -11,17 +11,11 @@ import numpy as np
 import open3d as o3d
 import trimesh
 
+from app.nift.raycast import scene_of
+
 LIGHT = np.array([0.4, -0.5, 0.75]) / np.linalg.norm([0.4, -0.5, 0.75])
 BACKGROUND = np.array([1.0, 1.0, 1.0])
 BASE_COLOUR = np.array([0.55, 0.68, 0.85])
-
-
-def to_open3d_scene(mesh: trimesh.Trimesh) -> o3d.t.geometry.RaycastingScene:
-    """An Embree ray-casting scene holding one triangle mesh."""
-    scene = o3d.t.geometry.RaycastingScene()
-    scene.add_triangles(o3d.core.Tensor(np.asarray(mesh.vertices, np.float32)),
-                        o3d.core.Tensor(np.asarray(mesh.faces, np.uint32)))
-    return scene
 
 
 def render_mesh(mesh: trimesh.Trimesh, size: int = 256, elevation_deg: float = 25.0,
@@ -35,7 +29,7 @@ def render_mesh(mesh: trimesh.Trimesh, size: int = 256, elevation_deg: float = 2
     eye = centre + direction * radius / np.sin(np.radians(fov / 2)) * 1.05
     rays = o3d.t.geometry.RaycastingScene.create_rays_pinhole(
         fov_deg=fov, center=centre.tolist(), eye=eye.tolist(), up=[0, 0, 1], width_px=size, height_px=size)
-    hits = to_open3d_scene(mesh).cast_rays(rays)
+    hits = scene_of(mesh).cast_rays(rays)
     hit = np.isfinite(hits["t_hit"].numpy())
     normals = hits["primitive_normals"].numpy()
     view = rays.numpy()[..., 3:]

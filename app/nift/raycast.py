@@ -1,0 +1,41 @@
+"""Embree ray casting through Open3D's RaycastingScene: the one place that builds scenes and casts."""
+from __future__ import annotations
+
+import numpy as np
+import open3d as o3d
+
+
+def make_scene(vertices: np.ndarray, faces: np.ndarray) -> o3d.t.geometry.RaycastingScene:
+    """An Embree scene holding one triangle mesh ((V, 3) vertices, (F, 3) faces)."""
+    vertices = np.ascontiguousarray(vertices, dtype=np.float32)
+    faces = np.ascontiguousarray(faces, dtype=np.uint32)
+    if len(faces) == 0:
+        raise ValueError("cannot ray cast an empty mesh (no faces)")
+    scene = o3d.t.geometry.RaycastingScene()
+    scene.add_triangles(o3d.core.Tensor(vertices), o3d.core.Tensor(faces))
+    return scene
+
+
+def scene_of(mesh) -> o3d.t.geometry.RaycastingScene:
+    """Scene from anything with `.vertices` and `.faces` (trimesh.Trimesh), or pass a scene through."""
+    if isinstance(mesh, o3d.t.geometry.RaycastingScene):
+        return mesh
+    return make_scene(np.asarray(mesh.vertices), np.asarray(mesh.faces))
+
+
+def cast(scene: o3d.t.geometry.RaycastingScene, rays: np.ndarray) -> np.ndarray:
+    """Hit distances of rays (R, 6) = [origin, unit direction]: (R,) float32, inf on a miss."""
+    rays = np.ascontiguousarray(rays, dtype=np.float32)
+    return scene.cast_rays(o3d.core.Tensor.from_numpy(rays))["t_hit"].numpy()
+
+
+def signed_distance(scene: o3d.t.geometry.RaycastingScene, points: np.ndarray) -> np.ndarray:
+    """Signed distance of points (N, 3) to a closed mesh (negative inside): (N,) float32."""
+    q = o3d.core.Tensor(np.ascontiguousarray(points, dtype=np.float32))
+    return scene.compute_signed_distance(q).numpy()
+
+
+def unsigned_distance(scene: o3d.t.geometry.RaycastingScene, points: np.ndarray) -> np.ndarray:
+    """Distance of points (N, 3) to the nearest surface point: (N,) float32."""
+    q = o3d.core.Tensor(np.ascontiguousarray(points, dtype=np.float32))
+    return scene.compute_distance(q).numpy()
