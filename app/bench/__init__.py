@@ -1,0 +1,1 @@
+"""Benchmarks: geometry throughput now; the success-rate tables later."""
