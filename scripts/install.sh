@@ -15,10 +15,13 @@ if [ ${#need_apt[@]} -gt 0 ]; then
     DEBIAN_FRONTEND=noninteractive $sudo_cmd apt-get install -y -qq "${need_apt[@]}" >/dev/null
 fi
 
+pip_install() {  # quiet pip; drop the machine's notes about absent local mirrors
+    .venv/bin/python -m pip install -q "$@" 2> >(grep -v "is ignored: it is neither" >&2)
+}
 [ -x .venv/bin/python ] || python3 -m venv .venv
-.venv/bin/python -m pip install -q --upgrade pip
+pip_install --upgrade pip
 # torch first and exactly pinned, so nothing later can pull a CUDA build.
-.venv/bin/python -m pip install -q "torch==2.13.0"
+pip_install "torch==2.13.0"
 extra=""; [ "${1:-}" = "--test" ] && extra="[test]"
-.venv/bin/python -m pip install -q -e ".${extra}"
+pip_install -e ".${extra}"
 echo "NIFT cell installed in .venv ($(.venv/bin/nift --version))"

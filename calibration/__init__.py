@@ -1,0 +1,1 @@
+"""Camera intrinsics/extrinsics: estimation and storage; see the cell issue."""

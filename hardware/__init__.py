@@ -1,0 +1,1 @@
+"""Device interfaces (Arm, Gripper, DepthCamera) and their implementations; see the cell issue."""

@@ -1,0 +1,43 @@
+import numpy as np
+import pytest
+
+from app import se3
+
+
+def test_invert_compose_round_trip(rng):
+    T = se3.random_poses(20, rng, translation_scale=2.0)
+    for Ti in T:
+        assert np.allclose(se3.compose(Ti, se3.invert(Ti)), np.eye(4), atol=1e-12)
+    assert np.allclose(se3.invert(T) @ T, np.eye(4), atol=1e-12)  # batched
+
+
+def test_ur_pose_round_trip_and_known_value(rng):
+    for T in se3.random_poses(20, rng, translation_scale=1.0):
+        assert np.allclose(se3.ur_to_pose(se3.pose_to_ur(T)), T, atol=1e-12)
+    quarter_turn_z = se3.ur_to_pose([1, 2, 3, 0, 0, np.pi / 2])
+    assert np.allclose(quarter_turn_z[:3, :3] @ [1, 0, 0], [0, 1, 0])
+    assert np.allclose(quarter_turn_z[:3, 3], [1, 2, 3])
+    with pytest.raises(ValueError, match="6 values"):
+        se3.ur_to_pose([1, 2, 3])
+
+
+def test_rotation_vector_near_pi_is_stable():
+    R = se3.rotvec_to_matrix([0.0, 0.0, np.pi - 1e-9])
+    assert np.isclose(se3.rotation_angle(R), np.pi, atol=1e-6)
+
+
+def test_haar_rotations_are_uniform(rng):
+    R = se3.random_rotations(20000, rng)
+    assert np.allclose(R @ R.transpose(0, 2, 1), np.eye(3), atol=1e-10)
+    assert np.allclose(np.linalg.det(R), 1.0)
+    assert np.abs(R.mean(axis=0)).max() < 0.02  # E[R] = 0 under the Haar measure
+    # the angle density of a uniform rotation is (1 - cos a) / pi, mean = pi/2 + 2/pi
+    assert np.isclose(se3.rotation_angle(R).mean(), np.pi / 2 + 2 / np.pi, atol=0.02)
+
+
+def test_transform_points_and_pose_error(rng):
+    T = se3.random_poses(1, rng, translation_scale=1.0)[0]
+    p = rng.normal(size=(5, 3))
+    assert np.allclose(se3.transform_points(se3.invert(T), se3.transform_points(T, p)), p)
+    dt, dr = se3.pose_error(T, T @ se3.make_pose(se3.rotvec_to_matrix([0.1, 0, 0]), [0, 0.02, 0]))
+    assert np.isclose(dt, 0.02) and np.isclose(dr, 0.1)
