@@ -108,3 +108,12 @@ def test_cloud_scf_agrees_with_mesh_scf(rng):
     true, est = compute_scf(mesh, pts), compute_scf_cloud(cloud, pts)
     r2 = 1 - ((est - true) ** 2).sum(0) / ((true - true.mean(0)) ** 2).sum(0)
     assert r2[0] > 0.9 and r2.mean() > 0.7
+
+
+def test_single_view_cloud_sees_one_side():
+    from app.nift.raycast import make_scene, view_cloud
+
+    box = trimesh.creation.box(extents=[0.2, 0.2, 0.2])
+    seen = view_cloud(make_scene(box.vertices, box.faces), np.array([1.0, 0.0, 0.0]), np.zeros(3))
+    assert len(seen) > 100
+    assert np.allclose(seen[:, 0], 0.1, atol=1e-5)  # only the face towards the camera

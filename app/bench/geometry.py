@@ -12,7 +12,7 @@ from typing import Callable
 import numpy as np
 
 from app.nift.ibs import compute_ibs
-from app.nift.raycast import cast, make_scene, signed_distance, unsigned_distance
+from app.nift.raycast import cast, make_scene, signed_distance, unsigned_distance, view_cloud
 from app.nift.scf import CHUNK_RAYS, compute_scf, compute_scf_cloud, spherical_basis
 from app.objects import generate, rack
 from app.se3 import make_pose, random_rotations
@@ -80,7 +80,11 @@ def scf_accuracy(mesh, n_points: int, rng: np.random.Generator) -> dict:
     rot_err = relative_error(compute_scf(moved, pts @ R.T + T[:3, 3]), ours)
     outside = query_box(mesh, n_points, rng, outside=True)
     cloud = mesh.sample(3000, seed=int(rng.integers(1 << 31)))
-    r2 = r2_per_band(compute_scf_cloud(cloud, outside), compute_scf(mesh, outside))
+    true = compute_scf(mesh, outside)
+    r2 = r2_per_band(compute_scf_cloud(cloud, outside), true)
+    centre = mesh.bounds.mean(axis=0)
+    seen = view_cloud(make_scene(mesh.vertices, mesh.faces), centre + [0.5, -0.5, 0.35], centre)
+    r2_single = r2_per_band(compute_scf_cloud(seen, outside), true)
     return {
         "scf_direction_error_median": float(np.median(direction_err)),
         "scf_direction_error_p95": float(np.percentile(direction_err, 95)),
@@ -88,6 +92,9 @@ def scf_accuracy(mesh, n_points: int, rng: np.random.Generator) -> dict:
         "scf_rotation_error_p95": float(np.percentile(rot_err, 95)),
         "scf_cloud_r2_per_band": [float(x) for x in r2],
         "scf_cloud_r2_mean": float(r2.mean()),
+        "scf_single_view_points": len(seen),
+        "scf_single_view_r2_per_band": [float(x) for x in r2_single],
+        "scf_single_view_r2_mean": float(r2_single.mean()),
     }
 
 

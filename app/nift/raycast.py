@@ -39,3 +39,16 @@ def unsigned_distance(scene: o3d.t.geometry.RaycastingScene, points: np.ndarray)
     """Distance of points (N, 3) to the nearest surface point: (N,) float32."""
     q = o3d.core.Tensor(np.ascontiguousarray(points, dtype=np.float32))
     return scene.compute_distance(q).numpy()
+
+
+def view_cloud(scene: o3d.t.geometry.RaycastingScene, eye: np.ndarray, target: np.ndarray,
+               fov_deg: float = 40.0, size: int = 256) -> np.ndarray:
+    """Noise-free single-view cloud: surface points a pinhole camera at `eye` sees, (M, 3) float64."""
+    view = np.subtract(target, eye)
+    up = [0.0, 0.0, 1.0] if abs(view[2]) < 0.99 * np.linalg.norm(view) else [0.0, 1.0, 0.0]  # not parallel
+    rays = o3d.t.geometry.RaycastingScene.create_rays_pinhole(
+        fov_deg=fov_deg, center=list(map(float, target)), eye=list(map(float, eye)), up=up,
+        width_px=size, height_px=size).numpy().reshape(-1, 6)
+    t = scene.cast_rays(o3d.core.Tensor(rays))["t_hit"].numpy()
+    hit = np.isfinite(t)
+    return (rays[hit, :3] + t[hit, None] * rays[hit, 3:]).astype(np.float64)
