@@ -8,11 +8,12 @@ in frame b into frame a, so `T_a_c = T_a_b @ T_b_c`. At device boundaries poses 
 from __future__ import annotations
 
 import numpy as np
-from scipy.spatial.transform import Rotation
+from scipy.spatial.transform import Rotation, Slerp
 
 __all__ = [
     "make_pose", "invert", "compose", "transform_points", "rotvec_to_matrix", "matrix_to_rotvec",
     "pose_to_ur", "ur_to_pose", "random_rotations", "random_poses", "rotation_angle", "pose_error",
+    "interpolate_pose",
 ]
 
 
@@ -96,3 +97,11 @@ def pose_error(T_a: np.ndarray, T_b: np.ndarray) -> tuple[float, float]:
     """(translation error in metres, rotation error in radians) between two poses."""
     dT = invert(T_a) @ T_b
     return float(np.linalg.norm(dT[:3, 3])), float(rotation_angle(dT[:3, :3]))
+
+
+def interpolate_pose(T0: np.ndarray, T1: np.ndarray, s: float) -> np.ndarray:
+    """Pose at fraction s in [0, 1] of the way from T0 to T1 (position lerp, rotation slerp)."""
+    T = np.eye(4)
+    T[:3, 3] = (1 - s) * T0[:3, 3] + s * T1[:3, 3]
+    T[:3, :3] = Slerp([0.0, 1.0], Rotation.from_matrix([T0[:3, :3], T1[:3, :3]]))(s).as_matrix()
+    return T

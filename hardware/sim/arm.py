@@ -1,0 +1,221 @@
+"""Simulated UR5 behind the `Arm` interface: a controller that plans and tracks like a real one.
+
+moveJ: a Ruckig time-optimal, jerk-limited joint motion (state to state - the free Ruckig, never
+its cloud waypoint service), tracked by PyBullet position control at the physics rate.
+moveL: a straight TCP line with a jerk-limited path profile; Pinocchio IK at every control step.
+A protective stop triggers on a tracking error above `tracking_error_limit` or a contact force on
+an arm link above `contact_force_limit`; the arm then holds still until unlocked.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pybullet as p
+from ruckig import InputParameter, Result, Ruckig, Trajectory
+
+from app.se3 import interpolate_pose, pose_to_ur, rotation_angle, ur_to_pose
+from hardware.interfaces import Arm, JointLimits, ProtectiveStopError
+from hardware.sim.robot import HOME_Q, SimRobot
+
+# Documented limits beyond the URDF (which gives position and velocity only).
+JOINT_ACCELERATION_LIMIT = np.array([8.0, 8.0, 8.0, 12.0, 12.0, 12.0])  # rad/s^2
+JOINT_JERK_LIMIT = np.array([60.0, 60.0, 60.0, 90.0, 90.0, 90.0])  # rad/s^3
+CARTESIAN_JERK = 5.0  # m/s^3 for moveL's path profile
+
+
+@dataclass(frozen=True)
+class SimArmConfig:
+    """Settings of the simulated controller."""
+
+    home_q: tuple[float, ...] = tuple(HOME_Q)
+    tracking_error_limit: float = 0.05  # rad, any joint
+    contact_force_limit: float = 150.0  # N on any arm link (not the fingers)
+    settle_time: float = 0.15  # s of holding the final target after a motion
+
+
+def ruckig_profile(q0: np.ndarray, q1: np.ndarray, v_max: np.ndarray, a_max: np.ndarray,
+                   j_max: np.ndarray) -> Trajectory:
+    """Time-optimal jerk-limited rest-to-rest trajectory from q0 to q1 (Ruckig, offline)."""
+    dof = len(q0)
+    inp = InputParameter(dof)
+    inp.current_position, inp.current_velocity, inp.current_acceleration = list(q0), [0.0] * dof, [0.0] * dof
+    inp.target_position, inp.target_velocity, inp.target_acceleration = list(q1), [0.0] * dof, [0.0] * dof
+    inp.max_velocity, inp.max_acceleration, inp.max_jerk = list(v_max), list(a_max), list(j_max)
+    traj = Trajectory(dof)
+    result = Ruckig(dof).calculate(inp, traj)
+    if result not in (Result.Working, Result.Finished):
+        raise ValueError(f"Ruckig could not plan the motion ({result})")
+    return traj
+
+
+class SimArm(Arm):
+    """The UR5 in PyBullet, driven through ur_rtde-style verbs."""
+
+    def __init__(self, config: SimArmConfig, robot: SimRobot) -> None:
+        super().__init__(config)
+        self.robot = robot
+        self._stopped = False
+        self._last_error = ""
+        self.max_tracking_error = 0.0  # rad, largest joint error during the last motion
+        k = robot.kinematics
+        self._limits = JointLimits(k.lower.copy(), k.upper.copy(), k.velocity_limit.copy(),
+                                   JOINT_ACCELERATION_LIMIT.copy(), JOINT_JERK_LIMIT.copy())
+
+    # lifecycle -------------------------------------------------------------------------------
+    def _connect(self) -> None:
+        self.robot.load()
+        self.robot.reset_arm(np.array(self.config.home_q))
+
+    def _disconnect(self) -> None:
+        pass  # the body stays in the world; the world owns it
+
+    # state -----------------------------------------------------------------------------------
+    @property
+    def joint_limits(self) -> JointLimits:
+        return self._limits
+
+    def getActualQ(self) -> np.ndarray:
+        self.require_connected()
+        return self.robot.arm_state()[0]
+
+    def getActualQd(self) -> np.ndarray:
+        self.require_connected()
+        return self.robot.arm_state()[1]
+
+    def getForwardKinematics(self, q: np.ndarray | None = None) -> np.ndarray:
+        q = self.getActualQ() if q is None else np.asarray(q, dtype=np.float64)
+        return pose_to_ur(self.robot.kinematics.fk(q))
+
+    def getActualTCPPose(self) -> np.ndarray:
+        return self.getForwardKinematics()
+
+    def setTcp(self, tcp_offset: np.ndarray) -> None:
+        self.robot.kinematics.set_tcp(ur_to_pose(tcp_offset))
+
+    def getTCPOffset(self) -> np.ndarray:
+        return pose_to_ur(self.robot.kinematics.T_tool0_tcp)
+
+    def isProtectiveStopped(self) -> bool:
+        return self._stopped
+
+    def unlockProtectiveStop(self) -> None:
+        self._stopped = False
+
+    def getLastError(self) -> str:
+        return self._last_error
+
+    # motion ----------------------------------------------------------------------------------
+    def moveJ(self, q: np.ndarray, speed: float = 1.05, acceleration: float = 1.4) -> bool:
+        self._before_motion()
+        q = np.asarray(q, dtype=np.float64)
+        if q.shape != (6,) or not np.isfinite(q).all():
+            raise ValueError(f"moveJ needs 6 finite joint positions, got {q}")
+        if not self._limits.contains(q):
+            raise ValueError(f"moveJ target {np.round(q, 3).tolist()} is outside the joint limits")
+        v = np.minimum(speed, self._limits.velocity)
+        a = np.minimum(acceleration, self._limits.acceleration)
+        traj = ruckig_profile(self.getActualQ(), q, v, a, self._limits.jerk)
+        return self._track(lambda t: traj.at_time(t)[:2], traj.duration)
+
+    def moveL(self, pose: np.ndarray, speed: float = 0.25, acceleration: float = 1.2) -> bool:
+        self._before_motion()
+        k = self.robot.kinematics
+        T0, T1 = k.fk(self.getActualQ()), ur_to_pose(pose)
+        length = max(np.linalg.norm(T1[:3, 3] - T0[:3, 3]), 1e-9)
+        angle = float(rotation_angle(T0[:3, :3].T @ T1[:3, :3]))
+        s_len = max(length, 0.1 * angle)  # path parameter covers rotation-only moves too
+        profile = ruckig_profile(np.zeros(1), np.array([s_len]), np.array([speed]), np.array([acceleration]),
+                                 np.array([CARTESIAN_JERK]))
+        q_prev = [self.getActualQ()]
+        dt = self.robot.world.config.time_step
+
+        def target(t: float):
+            s = profile.at_time(t)[0][0] / s_len
+            q = k.ik(interpolate_pose(T0, T1, s), q_prev[0])
+            if q is None or np.abs(q - q_prev[0]).max() > 4 * self._limits.velocity.max() * dt + 1e-3:
+                raise _NoIK(f"moveL: no continuous IK solution at {100 * s:.0f}% of the line")
+            qd = (q - q_prev[0]) / dt
+            q_prev[0] = q
+            return q, qd
+
+        return self._track(target, profile.duration)
+
+    def executeTrajectory(self, times: np.ndarray, q: np.ndarray, qd: np.ndarray | None = None) -> bool:
+        self._before_motion()
+        times, q = np.asarray(times, float), np.asarray(q, float)
+        if q.ndim != 2 or q.shape[1] != 6 or len(times) != len(q) or np.any(np.diff(times) <= 0):
+            raise ValueError("a trajectory needs increasing times (T,) and joint positions (T, 6)")
+        if np.abs(q[0] - self.getActualQ()).max() > 0.01:
+            raise ValueError("trajectory does not start at the arm's current joint positions")
+        if not all(self._limits.contains(qi) for qi in q):
+            raise ValueError("trajectory leaves the joint limits")
+        qd = np.gradient(q, times, axis=0) if qd is None else np.asarray(qd, float)
+
+        def target(t: float):
+            i = int(np.clip(np.searchsorted(times, t + times[0]) - 1, 0, len(times) - 2))
+            w = np.clip((t + times[0] - times[i]) / (times[i + 1] - times[i]), 0.0, 1.0)
+            return (1 - w) * q[i] + w * q[i + 1], (1 - w) * qd[i] + w * qd[i + 1]
+
+        return self._track(target, times[-1] - times[0])
+
+    def stopJ(self, deceleration: float = 2.0) -> None:
+        self.require_connected()
+        q, qd = self.robot.arm_state()
+        t_stop = float(np.abs(qd).max() / max(deceleration, 1e-6))
+        q_stop = q + qd * t_stop / 2  # constant deceleration to rest
+        self.robot.command_arm(q_stop, np.zeros(6))
+        self.robot.world.step(max(1, int(np.ceil(t_stop / self.robot.world.config.time_step))))
+
+    # internals -------------------------------------------------------------------------------
+    def _before_motion(self) -> None:
+        self.require_connected()
+        if self._stopped:
+            raise ProtectiveStopError("arm is in a protective stop; call unlockProtectiveStop() first")
+        self._last_error = ""
+
+    def _track(self, target, duration: float) -> bool:
+        """Stream targets(t) -> (q, qd) at the physics rate; watch tracking error and contacts."""
+        world = self.robot.world
+        dt = world.config.time_step
+        n = int(np.ceil(duration / dt)) + int(self.config.settle_time / dt)
+        q_des = self.getActualQ()
+        self.max_tracking_error = 0.0
+        for i in range(1, n + 1):
+            try:
+                q_des, qd_des = target(min(i * dt, duration))
+            except _NoIK as exc:
+                return self._halt(str(exc))
+            if i * dt > duration:
+                qd_des = np.zeros(6)
+            self.robot.command_arm(q_des, qd_des)
+            world.step()
+            error = np.abs(self.robot.arm_state()[0] - q_des).max()
+            self.max_tracking_error = max(self.max_tracking_error, error)
+            if error > self.config.tracking_error_limit:
+                return self._halt(f"protective stop: tracking error {error:.3f} rad")
+            if i % 8 == 0 and (force := self._arm_contact_force()) > self.config.contact_force_limit:
+                return self._halt(f"protective stop: {force:.0f} N contact on the arm")
+        return True
+
+    def _halt(self, reason: str) -> bool:
+        self._last_error = reason
+        if reason.startswith("protective stop"):
+            self._stopped = True
+        q = self.robot.arm_state()[0]
+        self.robot.command_arm(q, np.zeros(6))
+        self.robot.world.step(int(0.1 / self.robot.world.config.time_step))
+        return False
+
+    def _arm_contact_force(self) -> float:
+        """Largest normal force on an arm link (fingers excluded) from anything but itself."""
+        robot = self.robot
+        worst = 0.0
+        for c in p.getContactPoints(bodyA=robot.body, physicsClientId=robot.client):
+            if c[2] != robot.body and c[3] not in robot.finger_links:
+                worst = max(worst, c[9])
+        return worst
+
+
+class _NoIK(RuntimeError):
+    pass

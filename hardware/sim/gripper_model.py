@@ -1,0 +1,98 @@
+"""Our two-finger parallel gripper: geometry (documented here) and its URDF, attached at tool0.
+
+Dimensions (metres), in the tool0 frame (z out of the flange, fingers move along y):
+
+| part    | size (x, y, z)          | where                                                 |
+|---------|-------------------------|-------------------------------------------------------|
+| palm    | 0.050 x 0.150 x 0.060   | z from 0 to 0.060                                     |
+| finger  | 0.022 x 0.012 x 0.060   | z from 0.060 to 0.120; inner faces at y = +-width / 2 |
+| pad     | friction 1.5 on the inner face of each finger                                    |
+
+Stroke 0 to 0.085 m (each finger travels 0.0425 m), prismatic joints with a 60 N force limit.
+The TCP - the point between the pad centres - is 0.100 m along tool0's z.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class GripperGeometry:
+    """Sizes of the gripper (metres, kilograms, newtons)."""
+
+    palm: tuple[float, float, float] = (0.050, 0.150, 0.060)
+    finger: tuple[float, float, float] = (0.022, 0.012, 0.060)
+    stroke: float = 0.085
+    max_force: float = 60.0
+    max_speed: float = 0.15  # m/s of the opening
+    palm_mass: float = 0.6
+    finger_mass: float = 0.05
+    pad_friction: float = 1.5
+
+    @property
+    def tcp_z(self) -> float:
+        """Distance from tool0 to the TCP between the pad centres."""
+        return self.palm[2] + self.finger[2] * 2.0 / 3.0
+
+    @property
+    def T_tool0_tcp(self) -> np.ndarray:
+        """4x4 TCP offset from tool0."""
+        T = np.eye(4)
+        T[2, 3] = self.tcp_z
+        return T
+
+
+FINGER_JOINTS = ("finger_left_joint", "finger_right_joint")
+FINGER_LINKS = ("finger_left", "finger_right")
+PALM_LINK = "gripper_palm"
+
+
+def _box_link(name: str, size, xyz, mass: float, rgba: str) -> str:
+    sx, sy, sz = size
+    x, y, z = xyz
+    geom = f'<geometry><box size="{sx} {sy} {sz}"/></geometry>'
+    ixx = mass / 12 * (sy * sy + sz * sz)
+    iyy = mass / 12 * (sx * sx + sz * sz)
+    izz = mass / 12 * (sx * sx + sy * sy)
+    return f"""
+  <link name="{name}">
+    <inertial><origin xyz="{x} {y} {z}"/><mass value="{mass}"/>
+      <inertia ixx="{ixx}" iyy="{iyy}" izz="{izz}" ixy="0" ixz="0" iyz="0"/></inertial>
+    <visual><origin xyz="{x} {y} {z}"/>{geom}<material name="{name}_mat"><color rgba="{rgba}"/></material></visual>
+    <collision><origin xyz="{x} {y} {z}"/>{geom}</collision>
+  </link>"""
+
+
+def gripper_urdf_fragment(g: GripperGeometry = GripperGeometry(), parent: str = "tool0") -> str:
+    """URDF links and joints of the gripper, fixed to `parent` (insert before </robot>)."""
+    px, py, pz = g.palm
+    fx, fy, fz = g.finger
+    half = g.stroke / 2
+    parts = [_box_link(PALM_LINK, g.palm, (0, 0, pz / 2), g.palm_mass, "0.25 0.25 0.28 1")]
+    parts.append(f"""
+  <joint name="gripper_mount" type="fixed">
+    <parent link="{parent}"/><child link="{PALM_LINK}"/><origin xyz="0 0 0" rpy="0 0 0"/>
+  </joint>""")
+    for name, joint, sign in zip(FINGER_LINKS, FINGER_JOINTS, (1, -1)):
+        # joint value s = how far the finger has opened; inner face at y = sign * s
+        parts.append(_box_link(name, g.finger, (0, sign * fy / 2, fz / 2), g.finger_mass, "0.1 0.1 0.1 1"))
+        parts.append(f"""
+  <joint name="{joint}" type="prismatic">
+    <parent link="{PALM_LINK}"/><child link="{name}"/>
+    <origin xyz="0 0 {pz}"/><axis xyz="0 {sign} 0"/>
+    <limit lower="0" upper="{half}" effort="{g.max_force}" velocity="{g.max_speed / 2}"/>
+  </joint>""")
+    return "".join(parts)
+
+
+def standalone_gripper_urdf(g: GripperGeometry = GripperGeometry()) -> str:
+    """A free-floating gripper (root link `tool0`), used by the grasp judge."""
+    return f"""<?xml version="1.0"?>
+<robot name="nift_gripper">
+  <link name="tool0">
+    <inertial><mass value="0.1"/><inertia ixx="1e-4" iyy="1e-4" izz="1e-4" ixy="0" ixz="0" iyz="0"/></inertial>
+  </link>{gripper_urdf_fragment(g)}
+</robot>
+"""

@@ -1,0 +1,144 @@
+"""One PyBullet world per cell: the client, deterministic stepping, the table and the floor.
+
+The world frame is the robot's base frame (UR `base`): x towards the workspace, z up; the table
+top is the plane z = 0, the floor is TABLE_HEIGHT below it.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pybullet as p
+from scipy.spatial.transform import Rotation
+
+from hardware.interfaces import DeviceNotConnectedError
+
+TABLE_SIZE = (1.6, 1.4, 0.05)  # x, y, thickness
+TABLE_CENTER_XY = (0.35, 0.0)
+TABLE_HEIGHT = 0.75  # table top above the floor
+
+
+@dataclass(frozen=True)
+class SimWorldConfig:
+    """Physics settings of the simulated cell."""
+
+    gui: bool = False
+    time_step: float = 1.0 / 240.0
+    solver_iterations: int = 80
+    gravity: float = -9.81
+
+
+def pose_to_pybullet(T: np.ndarray) -> tuple[list[float], list[float]]:
+    """4x4 pose -> (position, xyzw quaternion) as PyBullet wants them."""
+    return T[:3, 3].tolist(), Rotation.from_matrix(T[:3, :3]).as_quat().tolist()
+
+
+def pybullet_to_pose(position, quaternion) -> np.ndarray:
+    """(position, xyzw quaternion) -> 4x4 pose."""
+    T = np.eye(4)
+    T[:3, :3] = Rotation.from_quat(quaternion).as_matrix()
+    T[:3, 3] = position
+    return T
+
+
+class SimWorld:
+    """A PyBullet physics client with the cell's static surroundings."""
+
+    def __init__(self, config: SimWorldConfig = SimWorldConfig()) -> None:
+        self.config = config
+        self.client: int | None = None
+        self.table: int | None = None
+        self.floor: int | None = None
+        self.steps = 0
+
+    @property
+    def is_connected(self) -> bool:
+        return self.client is not None
+
+    @property
+    def time(self) -> float:
+        """Simulated seconds since connect."""
+        return self.steps * self.config.time_step
+
+    def connect(self) -> None:
+        """Start the physics server (DIRECT, or GUI with config.gui) and build table and floor."""
+        if self.client is not None:
+            return
+        self.client = p.connect(p.GUI if self.config.gui else p.DIRECT)
+        p.setGravity(0, 0, self.config.gravity, physicsClientId=self.client)
+        p.setPhysicsEngineParameter(fixedTimeStep=self.config.time_step,
+                                    numSolverIterations=self.config.solver_iterations,
+                                    deterministicOverlappingPairs=1, physicsClientId=self.client)
+        sx, sy, sz = TABLE_SIZE
+        self.table = self.add_box((sx, sy, sz), (*TABLE_CENTER_XY, -sz / 2), rgba=(0.75, 0.7, 0.62, 1))
+        self.floor = self.add_box((6.0, 6.0, 0.1), (0.0, 0.0, -TABLE_HEIGHT - 0.05), rgba=(0.5, 0.5, 0.5, 1))
+        self.steps = 0
+
+    def disconnect(self) -> None:
+        """Stop the physics server."""
+        if self.client is not None:
+            p.disconnect(self.client)
+            self.client = None
+
+    def require(self) -> int:
+        """The client id, or DeviceNotConnectedError."""
+        if self.client is None:
+            raise DeviceNotConnectedError("the simulated world is not connected; call connect() first")
+        return self.client
+
+    def __enter__(self):
+        self.connect()
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.disconnect()
+
+    def step(self, n: int = 1) -> None:
+        """Advance the physics by n fixed steps."""
+        cid = self.require()
+        for _ in range(n):
+            p.stepSimulation(physicsClientId=cid)
+        self.steps += n
+
+    def add_box(self, size, center, mass: float = 0.0, rgba=(0.6, 0.6, 0.6, 1), friction: float = 0.8) -> int:
+        """A box body (static when mass = 0)."""
+        cid = self.require()
+        half = [s / 2 for s in size]
+        col = p.createCollisionShape(p.GEOM_BOX, halfExtents=half, physicsClientId=cid)
+        vis = p.createVisualShape(p.GEOM_BOX, halfExtents=half, rgbaColor=rgba, physicsClientId=cid)
+        body = p.createMultiBody(mass, col, vis, basePosition=list(center), physicsClientId=cid)
+        p.changeDynamics(body, -1, lateralFriction=friction, physicsClientId=cid)
+        return body
+
+    def add_mesh(self, visual_obj: Path, collision_obj: Path, T_world_body: np.ndarray, mass: float = 0.0,
+                 scale: float = 1.0, rgba=(0.6, 0.7, 0.9, 1), friction: float = 0.8) -> int:
+        """A body from a visual OBJ and a collision OBJ (one convex hull per `o` block)."""
+        cid = self.require()
+        s = [scale] * 3
+        col = p.createCollisionShape(p.GEOM_MESH, fileName=str(collision_obj), meshScale=s, physicsClientId=cid)
+        vis = p.createVisualShape(p.GEOM_MESH, fileName=str(visual_obj), meshScale=s, rgbaColor=rgba,
+                                  physicsClientId=cid)
+        pos, quat = pose_to_pybullet(T_world_body)
+        body = p.createMultiBody(mass, col, vis, basePosition=pos, baseOrientation=quat, physicsClientId=cid)
+        p.changeDynamics(body, -1, lateralFriction=friction, spinningFriction=0.002, rollingFriction=0.0005,
+                         physicsClientId=cid)
+        return body
+
+    def remove(self, body: int) -> None:
+        """Remove a body."""
+        p.removeBody(body, physicsClientId=self.require())
+
+    def pose(self, body: int) -> np.ndarray:
+        """World pose of a body's base (4x4)."""
+        return pybullet_to_pose(*p.getBasePositionAndOrientation(body, physicsClientId=self.require()))
+
+    def set_pose(self, body: int, T: np.ndarray) -> None:
+        """Teleport a body (velocity zeroed)."""
+        cid = self.require()
+        p.resetBasePositionAndOrientation(body, *pose_to_pybullet(T), physicsClientId=cid)
+        p.resetBaseVelocity(body, [0, 0, 0], [0, 0, 0], physicsClientId=cid)
+
+    def in_contact(self, a: int, b: int) -> bool:
+        """True if bodies a and b touch after the last step."""
+        return len(p.getContactPoints(a, b, physicsClientId=self.require())) > 0
