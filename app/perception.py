@@ -1,0 +1,102 @@
+"""One RGB-D frame -> the object's point cloud in the robot base frame (Open3D throughout).
+
+Steps: back-project the valid depth pixels with the intrinsics and the (calibrated) camera pose,
+crop to the workspace box, remove the table plane (RANSAC), keep the largest DBSCAN cluster,
+remove statistical outliers, then resample to a fixed point count (farthest point sampling).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import open3d as o3d
+
+from hardware.interfaces import Frame
+
+
+@dataclass(frozen=True)
+class PerceptionConfig:
+    """Workspace crop (base frame, metres) and the segmentation parameters."""
+
+    x_range: tuple[float, float] = (0.25, 0.80)
+    y_range: tuple[float, float] = (-0.30, 0.30)
+    z_range: tuple[float, float] = (-0.03, 0.45)
+    plane_threshold: float = 0.006  # RANSAC inlier distance
+    above_plane: float = 0.004  # points closer than this to the table plane are table
+    cluster_eps: float = 0.015
+    cluster_min_points: int = 20
+    outlier_neighbors: int = 20
+    outlier_std_ratio: float = 2.0
+    n_points: int = 1024
+    seed: int = 0
+
+
+def back_project(frame: Frame, T_base_cam: np.ndarray) -> np.ndarray:
+    """Valid depth pixels as points in the base frame: (M, 3)."""
+    depth = np.asarray(frame.depth)
+    K = frame.intrinsics
+    if depth.shape != (K.height, K.width):
+        raise ValueError(f"depth image is {depth.shape}, intrinsics say {(K.height, K.width)}")
+    if np.isnan(depth).any():
+        raise ValueError("depth image contains NaN (a driver should report invalid depth as 0)")
+    if not (depth > 0).any():
+        raise ValueError("depth image has no valid pixel (all 0)")
+    image = o3d.t.geometry.Image(o3d.core.Tensor(np.ascontiguousarray(depth, dtype=np.float32)))
+    cloud = o3d.t.geometry.PointCloud.create_from_depth_image(
+        image, o3d.core.Tensor(K.matrix), o3d.core.Tensor(np.linalg.inv(T_base_cam)),
+        depth_scale=1.0, depth_max=10.0)
+    return cloud.point.positions.numpy().astype(np.float64)
+
+
+def crop(points: np.ndarray, cfg: PerceptionConfig) -> np.ndarray:
+    """Points inside the workspace box."""
+    lo = np.array([cfg.x_range[0], cfg.y_range[0], cfg.z_range[0]])
+    hi = np.array([cfg.x_range[1], cfg.y_range[1], cfg.z_range[1]])
+    return points[np.all((points >= lo) & (points <= hi), axis=1)]
+
+
+def remove_table(points: np.ndarray, cfg: PerceptionConfig) -> np.ndarray:
+    """Drop the dominant near-horizontal plane and everything within `above_plane` of it."""
+    pcd = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(points))
+    o3d.utility.random.seed(cfg.seed)
+    (a, b, c, d), _ = pcd.segment_plane(cfg.plane_threshold, 3, 500)
+    normal = np.array([a, b, c])
+    if abs(normal[2]) < 0.9 * np.linalg.norm(normal):
+        return points  # no table in view: the largest plane is something else
+    if c < 0:
+        normal, d = -normal, -d
+    height = (points @ normal + d) / np.linalg.norm(normal)
+    return points[height > cfg.above_plane]
+
+
+def largest_cluster(points: np.ndarray, cfg: PerceptionConfig) -> np.ndarray:
+    """The biggest DBSCAN cluster."""
+    pcd = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(points))
+    labels = np.asarray(pcd.cluster_dbscan(cfg.cluster_eps, cfg.cluster_min_points))
+    if (labels < 0).all():
+        raise ValueError("no object in the workspace (no cluster after removing the table)")
+    biggest = np.bincount(labels[labels >= 0]).argmax()
+    return points[labels == biggest]
+
+
+def resample(points: np.ndarray, n: int, seed: int) -> np.ndarray:
+    """Exactly n points: farthest point sampling down, random repeats up."""
+    if len(points) >= n:
+        pcd = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(points))
+        return np.asarray(pcd.farthest_point_down_sample(n).points)
+    extra = np.random.default_rng(seed).choice(len(points), n - len(points))
+    return np.concatenate([points, points[extra]])
+
+
+def object_cloud(frame: Frame, T_base_cam: np.ndarray, cfg: PerceptionConfig = PerceptionConfig()) -> np.ndarray:
+    """The object's cloud (cfg.n_points, 3) in the base frame, or a one-line ValueError."""
+    points = crop(back_project(frame, T_base_cam), cfg)
+    if len(points) == 0:
+        raise ValueError("no object in the workspace (no depth point inside the workspace box)")
+    points = remove_table(points, cfg)
+    if len(points) < cfg.cluster_min_points:
+        raise ValueError("no object in the workspace (only the table is visible)")
+    points = largest_cluster(points, cfg)
+    pcd = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(points))
+    pcd, _ = pcd.remove_statistical_outlier(cfg.outlier_neighbors, cfg.outlier_std_ratio)
+    return resample(np.asarray(pcd.points), cfg.n_points, cfg.seed)

@@ -1,0 +1,84 @@
+"""Putting procedural objects into the simulated cell, as the benchmark protocol needs them.
+
+Upright: a random yaw and a position in the workspace, resting on the table. Arbitrary: a Haar
+random rotation, lowest point 5 mm above the table, held by a fixed constraint while observed
+(as NDF does) until `release` is called. Scale is uniform. Masses are per category (documented
+below) times scale^3; the collision model is the CoACD decomposition of the unscaled instance,
+scaled by PyBullet (uniform scaling keeps convex parts convex).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pybullet as p
+import trimesh
+
+from app.cell import WORKSPACE
+from app.objects import generate
+from app.objects.collision import collision_model, visual_model
+from app.se3 import make_pose, random_rotations, rotvec_to_matrix
+from hardware.sim.world import SimWorld, pose_to_pybullet
+
+MASS = {"mug": 0.30, "bowl": 0.30, "bottle": 0.45, "vase": 0.50}  # kg at scale 1
+POSES = ("upright", "arbitrary")
+SCALE_RANGE = (0.85, 1.15)  # uniform random scaling of test objects
+
+
+@dataclass
+class SpawnedObject:
+    """An object in the world: its body, its canonical mesh and scale, and a holding constraint."""
+
+    body: int
+    category: str
+    seed: int
+    mesh: trimesh.Trimesh  # canonical frame, already scaled
+    scale: float
+    constraint: int | None = None
+
+
+def sample_pose(mesh: trimesh.Trimesh, pose: str, rng: np.random.Generator) -> np.ndarray:
+    """T_world_obj for an upright or arbitrary placement in the workspace (mesh already scaled)."""
+    if pose not in POSES:
+        raise ValueError(f"unknown pose setting {pose!r}; choose {' or '.join(POSES)}")
+    (x0, x1), (y0, y1) = WORKSPACE
+    R = rotvec_to_matrix([0, 0, rng.uniform(-np.pi, np.pi)]) if pose == "upright" else random_rotations(1, rng)[0]
+    xy = [rng.uniform(x0, x1), rng.uniform(y0, y1)]
+    z = -(mesh.vertices @ R.T)[:, 2].min() + (0.0 if pose == "upright" else 0.005)
+    T = make_pose(R, [*xy, z])
+    # centre the object's bounding box over the sampled point, not its canonical origin
+    centre = (mesh.vertices @ R.T).mean(axis=0)
+    T[:2, 3] -= centre[:2]
+    return T
+
+
+def spawn(world: SimWorld, category: str, seed: int, pose: str = "upright", scale: float = 1.0,
+          rng: np.random.Generator | None = None, T_world_obj: np.ndarray | None = None) -> SpawnedObject:
+    """Add an instance to the world (at T_world_obj, or a sampled pose) and let it settle if free."""
+    rng = rng or np.random.default_rng(seed)
+    canonical = generate(category, seed)
+    mesh = canonical.copy()
+    mesh.apply_scale(scale)
+    T = sample_pose(mesh, pose, rng) if T_world_obj is None else T_world_obj
+    body = world.add_mesh(visual_model(canonical), collision_model(canonical), T, mass=MASS[category] * scale ** 3,
+                          scale=scale, rgba=(0.35, 0.55, 0.85, 1.0))
+    obj = SpawnedObject(body, category, seed, mesh, scale)
+    if pose == "arbitrary":
+        hold(world, obj)
+    world.step(60)  # settle on the table (held objects stay put)
+    return obj
+
+
+def hold(world: SimWorld, obj: SpawnedObject) -> None:
+    """Fix the object where it is now (a fixed constraint to the world)."""
+    if obj.constraint is None:
+        pos, quat = pose_to_pybullet(world.pose(obj.body))
+        obj.constraint = p.createConstraint(obj.body, -1, -1, -1, p.JOINT_FIXED, [0, 0, 0], [0, 0, 0], pos,
+                                            [0, 0, 0, 1], quat, physicsClientId=world.require())
+
+
+def release(world: SimWorld, obj: SpawnedObject) -> None:
+    """Remove the constraint that holds an arbitrary-pose object."""
+    if obj.constraint is not None:
+        p.removeConstraint(obj.constraint, physicsClientId=world.require())
+        obj.constraint = None
