@@ -18,9 +18,9 @@ from hardware.interfaces import Frame
 class PerceptionConfig:
     """Workspace crop (base frame, metres) and the segmentation parameters."""
 
-    x_range: tuple[float, float] = (0.25, 0.80)
-    y_range: tuple[float, float] = (-0.30, 0.30)
-    z_range: tuple[float, float] = (-0.03, 0.45)
+    x_range: tuple[float, float] = (0.28, 0.80)
+    y_range: tuple[float, float] = (-0.26, 0.28)
+    z_range: tuple[float, float] = (-0.03, 0.40)
     plane_threshold: float = 0.006  # RANSAC inlier distance
     above_plane: float = 0.004  # points closer than this to the table plane are table
     cluster_eps: float = 0.015

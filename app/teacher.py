@@ -45,7 +45,7 @@ def grasp_pose(mesh: trimesh.Trimesh) -> np.ndarray:
     y_axis = np.array([np.cos(tilt), 0.0, np.sin(tilt)])
     R = np.column_stack([np.cross(y_axis, z_axis), y_axis, z_axis])
     mid = np.array([-(r_top + r_low) / 2 + wall / 2, 0.0, top - depth / 2])  # middle of the gripped wall
-    tcp = mid - (depth / 2 - TIP_BELOW_TCP) * z_axis  # fingertips end `depth` below the rim
+    tcp = mid + (depth / 2 - TIP_BELOW_TCP) * z_axis  # fingertips end `depth` below the rim
     return make_pose(R, tcp)
 
 

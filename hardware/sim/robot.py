@@ -15,7 +15,7 @@ from hardware.robot_description import resolve_packages, ur5_urdf, write_cached
 from hardware.sim.gripper_model import FINGER_JOINTS, FINGER_LINKS, GripperGeometry, gripper_urdf_fragment
 from hardware.sim.world import SimWorld, pose_to_pybullet
 
-HOME_Q = np.array([np.pi, -1.75, 1.75, -1.57, -1.57, 0.0])  # TCP over the workspace, pointing down
+HOME_Q = np.array([np.pi, -2.2, 1.9, -1.27, -1.57, 0.0])  # TCP pointing down at (0.22, 0.11, 0.37), clear of the camera crop
 
 
 def cell_robot_urdf(geometry: GripperGeometry = GripperGeometry()) -> str:

@@ -1,0 +1,105 @@
+"""The simulated cell: camera + perception on a known box, and the success judges on oracle poses."""
+import dataclasses
+
+import numpy as np
+import pytest
+
+from app.cell import CellConfig, SimCell
+from app.judges import judge_grasp, judge_place
+from app.objects import rack, shelf
+from app.perception import PerceptionConfig, object_cloud
+from app.spawn import spawn
+from app.teacher import grasp_pose, hang_pose, shelf_pose
+from hardware.interfaces import Frame
+
+BOX = (0.10, 0.08, 0.06)
+BOX_CENTRE = (0.50, 0.02, 0.03)
+
+
+@pytest.fixture(scope="module")
+def cell():
+    with SimCell() as c:
+        yield c
+
+
+def test_box_comes_back_at_its_place_and_size(cell):
+    box = cell.world.add_box(BOX, BOX_CENTRE, mass=0.2)
+    cell.world.step(30)
+    try:
+        frame = cell.camera.capture()
+        assert frame.depth.shape == (424, 512) and frame.color.dtype == np.uint8
+        cloud = object_cloud(frame, cell.camera.T_base_cam)
+    finally:
+        cell.world.remove(box)
+    assert cloud.shape == (1024, 3)
+    lo, hi = np.percentile(cloud, 1, axis=0), np.percentile(cloud, 99, axis=0)
+    # seen from the front-top: the +x face and the top; noise ~1-2 mm at 0.8 m, quantised to 1 mm
+    assert abs(hi[0] - (BOX_CENTRE[0] + BOX[0] / 2)) < 0.004
+    assert abs(hi[2] - BOX[2]) < 0.004
+    assert abs((hi[1] - lo[1]) - BOX[1]) < 0.008
+    assert abs(lo[0] - (BOX_CENTRE[0] - BOX[0] / 2)) < 0.012  # far edge of the top face, seen at a grazing angle
+    # the segmentation (ground truth, tests only) agrees with what perception kept
+    assert (cell.camera.last_segmentation == box).sum() > 500
+
+
+def test_perception_names_bad_frames(cell):
+    frame = cell.camera.capture()
+    with pytest.raises(ValueError, match="no object in the workspace"):
+        object_cloud(frame, cell.camera.T_base_cam)  # empty table
+    nan = dataclasses.replace(frame, depth=np.full_like(frame.depth, np.nan))
+    with pytest.raises(ValueError, match="NaN"):
+        object_cloud(nan, cell.camera.T_base_cam)
+    zero = dataclasses.replace(frame, depth=np.zeros_like(frame.depth))
+    with pytest.raises(ValueError, match="no valid pixel"):
+        object_cloud(zero, cell.camera.T_base_cam)
+    with pytest.raises(ValueError, match="depth image is"):
+        object_cloud(dataclasses.replace(frame, depth=frame.depth[:10]), cell.camera.T_base_cam)
+
+
+def test_noise_grows_with_distance():
+    from hardware.sim.kinect import NoiseModel
+
+    noise = NoiseModel()
+    assert noise.sigma(np.array(2.0), np.array(0.0)) > 2 * noise.sigma(np.array(0.6), np.array(0.0))
+    assert noise.sigma(np.array(1.0), np.radians(70.0)) > 2 * noise.sigma(np.array(1.0), np.array(0.0))
+
+
+def place_goal(cell, obj):
+    """Oracle place pose of the teacher, in the world."""
+    if obj.category == "mug":
+        return cell.config.fixture_pose("rack") @ hang_pose(obj.mesh.metadata["semantics"], rack(), obj.scale)
+    return cell.config.fixture_pose("shelf") @ shelf_pose(obj.mesh.metadata["semantics"], shelf())
+
+
+@pytest.mark.parametrize("category", ["mug", "bowl", "bottle"])
+def test_judges_pass_oracle_and_fail_wrong_poses(cell, category):
+    world, rng = cell.world, np.random.default_rng(7)
+    fixture = "rack" if category == "mug" else "shelf"
+    for pose in ("upright", "arbitrary"):
+        obj = spawn(world, category, 100_001, pose, scale=1.1, rng=rng)
+        verdict = judge_grasp(world, obj, world.pose(obj.body) @ grasp_pose(obj.mesh), avoid=(cell.robot.body,))
+        world.remove(obj.body)
+        assert verdict.success, f"{category} {pose} grasp: {verdict.reason}"
+        obj = spawn(world, category, 100_001, pose, scale=1.1, rng=rng)
+        verdict = judge_place(world, obj, place_goal(cell, obj), cell.fixtures[fixture], upright=fixture == "shelf")
+        world.remove(obj.body)
+        assert verdict.success, f"{category} {pose} place: {verdict.reason}"
+
+    obj = spawn(world, category, 100_001, "upright", rng=rng)
+    above = world.pose(obj.body) @ grasp_pose(obj.mesh)
+    above[2, 3] += 0.10  # gripper 10 cm too high
+    assert not judge_grasp(world, obj, above, avoid=(cell.robot.body,)).success
+    world.remove(obj.body)
+    obj = spawn(world, category, 100_001, "upright", rng=rng)
+    upside_down = place_goal(cell, obj) @ np.diag([1.0, -1.0, -1.0, 1.0])
+    assert not judge_place(world, obj, upside_down, cell.fixtures[fixture], upright=fixture == "shelf").success
+    world.remove(obj.body)
+
+
+def test_mug_dropped_beside_the_rack_falls_to_the_floor(cell):
+    obj = spawn(cell.world, "mug", 100_001, "upright")
+    beside = cell.config.fixture_pose("rack") @ hang_pose(obj.mesh.metadata["semantics"], rack())
+    beside[1, 3] += 0.25
+    verdict = judge_place(cell.world, obj, beside, cell.fixtures["rack"], upright=False)
+    cell.world.remove(obj.body)
+    assert not verdict.success and "floor" in verdict.reason

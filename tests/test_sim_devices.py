@@ -1,0 +1,112 @@
+import numpy as np
+import pytest
+
+from app.se3 import pose_to_ur
+from hardware.interfaces import DeviceNotConnectedError, ProtectiveStopError
+from hardware.sim.arm import SimArm, SimArmConfig
+from hardware.sim.gripper import SimGripper, SimGripperConfig
+from hardware.sim.robot import HOME_Q, SimRobot
+from hardware.sim.world import SimWorld
+
+
+@pytest.fixture
+def rig():
+    world = SimWorld()
+    robot = SimRobot(world)
+    arm, gripper = SimArm(SimArmConfig(), robot), SimGripper(SimGripperConfig(), robot)
+    with world, arm, gripper:
+        yield world, robot, arm, gripper
+
+
+def record_steps(world, fn):
+    """From now on, append fn() to the returned list after every physics step."""
+    samples = []
+    step = world.step
+
+    def probing_step(n=1):
+        step(n)
+        samples.append(fn())
+
+    world.step = probing_step
+    return samples
+
+
+def test_devices_refuse_use_while_disconnected():
+    world = SimWorld()
+    arm = SimArm(SimArmConfig(), SimRobot(world))
+    with pytest.raises(DeviceNotConnectedError, match="not connected"):
+        arm.getActualQ()
+    arm.connect()
+    arm.connect()  # idempotent
+    assert np.allclose(arm.getActualQ(), HOME_Q, atol=1e-6)
+    arm.disconnect()
+    arm.disconnect()
+    with pytest.raises(DeviceNotConnectedError):
+        arm.moveJ(HOME_Q)
+    world.disconnect()
+
+
+def test_pybullet_and_pinocchio_forward_kinematics_agree(rig, rng):
+    world, robot, arm, _ = rig
+    for q in rng.uniform(-np.pi, np.pi, size=(20, 6)):
+        robot.reset_arm(q)
+        for frame in ("tool0", "wrist_2_link", "forearm_link"):
+            T_sim, T_pin = robot.link_pose(frame), robot.kinematics.frame_pose(q, frame)
+            assert np.abs(T_sim[:3, 3] - T_pin[:3, 3]).max() < 1e-6
+            assert np.abs(T_sim[:3, :3] - T_pin[:3, :3]).max() < 1e-6
+
+
+def test_moveJ_reaches_target_within_speed_limits(rig):
+    world, robot, arm, _ = rig
+    target = HOME_Q + np.array([0.6, 0.3, -0.4, 0.5, 0.4, 1.2])
+    speeds = record_steps(world, arm.getActualQd)
+    assert arm.moveJ(target, speed=2.0, acceleration=4.0), arm.getLastError()
+    assert np.abs(arm.getActualQ() - target).max() < 1e-3
+    assert np.abs(np.array(speeds)).max() <= 2.0 * 1.02  # the commanded speed, 2 % tracking slack
+    with pytest.raises(ValueError, match="outside the joint limits"):
+        arm.moveJ(np.array([0, 0, 4.0, 0, 0, 0]))
+
+
+def test_moveL_stays_on_the_line(rig):
+    world, robot, arm, _ = rig
+    start = arm.getActualTCPPose()
+    goal = start.copy()
+    goal[:3] += [0.12, -0.08, -0.10]
+    path = record_steps(world, lambda: arm.getActualTCPPose()[:3])
+    assert arm.moveL(goal, speed=0.2), arm.getLastError()
+    assert np.abs(arm.getActualTCPPose()[:3] - goal[:3]).max() < 1e-3
+    d = (goal[:3] - start[:3]) / np.linalg.norm(goal[:3] - start[:3])
+    offsets = np.array(path) - start[:3]
+    off_line = np.linalg.norm(offsets - (offsets @ d)[:, None] * d, axis=1)
+    assert off_line.max() < 0.002
+
+
+def test_protective_stop_on_collision_with_the_table(rig):
+    world, robot, arm, _ = rig
+    below_table = arm.getActualTCPPose()
+    below_table[2] = -0.2
+    assert not arm.moveL(below_table, speed=0.2)
+    assert arm.isProtectiveStopped() and "protective stop" in arm.getLastError()
+    assert arm.getActualTCPPose()[2] > -0.02  # it stopped at the table
+    with pytest.raises(ProtectiveStopError):
+        arm.moveJ(HOME_Q)
+    arm.unlockProtectiveStop()
+    assert arm.moveJ(HOME_Q)
+
+
+def test_gripper_closes_on_nothing_and_opens(rig):
+    _, _, _, gripper = rig
+    assert np.isclose(gripper.width, gripper.stroke, atol=1e-3)
+    assert gripper.close(force=30.0) is False and not gripper.object_detected
+    assert gripper.width < 0.002
+    gripper.open()
+    assert np.isclose(gripper.width, gripper.stroke, atol=1e-3)
+    with pytest.raises(ValueError, match="grip force"):
+        gripper.close(force=500.0)
+
+
+def test_tcp_pose_matches_ur_convention(rig):
+    _, robot, arm, _ = rig
+    q = arm.getActualQ()
+    assert np.allclose(arm.getActualTCPPose(), pose_to_ur(robot.kinematics.fk(q)))
+    assert np.allclose(arm.getTCPOffset()[:3], [0, 0, robot.geometry.tcp_z])
