@@ -6,9 +6,9 @@ import signal
 import sys
 
 from app import __version__
-from app.commands import bench_geometry, objects
+from app.commands import bench_geometry, capture, objects, sim
 
-COMMANDS = [objects, bench_geometry]
+COMMANDS = [objects, sim, capture, bench_geometry]
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -3,6 +3,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from app.cli import COMMANDS, build_parser, main
@@ -58,3 +59,24 @@ def test_bench_geometry_quick_reports_every_figure():
         assert figures[key] > 0, key
     assert figures["directions"] == 974
     assert figures["ibs_gap_max_mm"] < figures["ibs_sample_spacing_mm"]
+
+
+def test_sim_and_capture_write_what_they_say(tmp_path):
+    out = nift("sim", "--json")
+    assert out.returncode == 0, out.stderr
+    state = json.loads(out.stdout[out.stdout.index("{"):])
+    assert state["gripper_width"] > 0.08 and set(state["fixtures"]) == {"rack", "shelf"}
+
+    cloud, image = tmp_path / "cloud.ply", tmp_path / "rgb.png"
+    out = nift("capture", "--category", "mug", "--seed", "1", "--out", str(cloud), "--image", str(image), "--json")
+    assert out.returncode == 0, out.stderr
+    report = json.loads(out.stdout[out.stdout.index("{"):])
+    import open3d as o3d
+
+    points = np.asarray(o3d.io.read_point_cloud(str(cloud)).points)
+    assert points.shape == (report["points"], 3) == (1024, 3)
+    # the cloud is where the object was spawned, within the object's size
+    assert np.linalg.norm(points.mean(axis=0)[:2] - np.array(report["object_position"][:2])) < 0.08
+    assert image.read_bytes()[:8] == PNG_MAGIC
+    bad = nift("capture", "--out", str(tmp_path / "cloud.txt"))
+    assert bad.returncode == 2 and "--out must end in .ply" in bad.stderr
