@@ -80,3 +80,11 @@ def test_sim_and_capture_write_what_they_say(tmp_path):
     assert image.read_bytes()[:8] == PNG_MAGIC
     bad = nift("capture", "--out", str(tmp_path / "cloud.txt"))
     assert bad.returncode == 2 and "--out must end in .ply" in bad.stderr
+
+
+def test_bench_cell_quick_reports_figures():
+    out = nift("bench-cell", "--quick", "--json")
+    assert out.returncode == 0, out.stderr
+    figures = json.loads(out.stdout[out.stdout.index("{"):])
+    assert figures["real_time_factor_moveJ"] > 1.0  # faster than real time in DIRECT mode
+    assert 0 < figures["camera_frame_ms"] < 5000 and 0 < figures["perception_ms"] < 5000
