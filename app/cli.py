@@ -6,9 +6,9 @@ import signal
 import sys
 
 from app import __version__
-from app.commands import bench_cell, bench_geometry, capture, objects, sim
+from app.commands import bench_cell, bench_geometry, calibrate, capture, objects, sim
 
-COMMANDS = [objects, sim, capture, bench_geometry, bench_cell]
+COMMANDS = [objects, sim, calibrate, capture, bench_geometry, bench_cell]
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -19,6 +19,7 @@ def atomic_path(path: str | Path) -> Iterator[Path]:
     tmp_path = Path(tmp)
     try:
         yield tmp_path
+        os.chmod(tmp_path, 0o644)  # mkstemp makes it private; a result file is for everyone
         os.replace(tmp_path, path)
     finally:
         if tmp_path.exists():

@@ -60,6 +60,13 @@ class UR5Kinematics:
         pin.updateFramePlacements(self.model, self.data)
         return pin.getFrameJacobian(self.model, self.data, self._tcp, pin.ReferenceFrame.LOCAL)
 
+    def nearest_equivalent(self, q: np.ndarray, q_ref: np.ndarray) -> np.ndarray:
+        """q with each joint shifted by a multiple of 2 pi (within limits) to be closest to q_ref."""
+        q_ref = np.asarray(q_ref, dtype=np.float64)
+        shifted = q + 2 * np.pi * np.round((q_ref - q) / (2 * np.pi))
+        inside = (shifted >= self.lower) & (shifted <= self.upper)
+        return np.where(inside, shifted, q)
+
     def ik(self, T_base_target: np.ndarray, q_seed: np.ndarray, tol_pos: float = 1e-5,
            tol_rot: float = 1e-4, max_iter: int = 300, damping: float = 1e-3) -> np.ndarray | None:
         """Joint positions reaching T_base_target from q_seed by damped least squares, or None.
@@ -73,7 +80,7 @@ class UR5Kinematics:
             self._update(q)
             err = pin.log6(self.data.oMf[self._tcp].actInv(target)).vector  # (6,) in the TCP frame
             if np.linalg.norm(err[:3]) < tol_pos and np.linalg.norm(err[3:]) < tol_rot:
-                return q
+                return self.nearest_equivalent(q, q_seed)
             J = pin.computeFrameJacobian(self.model, self.data, q, self._tcp, pin.ReferenceFrame.LOCAL)
             dq = J.T @ np.linalg.solve(J @ J.T + damping ** 2 * eye, err)
             step = np.linalg.norm(dq)

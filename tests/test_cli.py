@@ -68,7 +68,9 @@ def test_sim_and_capture_write_what_they_say(tmp_path):
     assert state["gripper_width"] > 0.08 and set(state["fixtures"]) == {"rack", "shelf"}
 
     cloud, image = tmp_path / "cloud.ply", tmp_path / "rgb.png"
-    out = nift("capture", "--category", "mug", "--seed", "1", "--out", str(cloud), "--image", str(image), "--json")
+    out = nift("capture", "--category", "mug", "--seed", "1", "--out", str(cloud), "--image", str(image), "--json",
+               "--calibration", str(tmp_path / "calibration.json"))  # missing: capture calibrates first
+    assert (tmp_path / "calibration.json").exists()
     assert out.returncode == 0, out.stderr
     report = json.loads(out.stdout[out.stdout.index("{"):])
     import open3d as o3d
@@ -78,7 +80,7 @@ def test_sim_and_capture_write_what_they_say(tmp_path):
     # the cloud is where the object was spawned, within the object's size
     assert np.linalg.norm(points.mean(axis=0)[:2] - np.array(report["object_position"][:2])) < 0.08
     assert image.read_bytes()[:8] == PNG_MAGIC
-    bad = nift("capture", "--out", str(tmp_path / "cloud.txt"))
+    bad = nift("capture", "--out", str(tmp_path / "cloud.txt"), "--calibration", str(tmp_path / "calibration.json"))
     assert bad.returncode == 2 and "--out must end in .ply" in bad.stderr
 
 

@@ -1,4 +1,4 @@
-"""Cell benchmark: simulation real-time factor, Kinect frame time, perception time per frame."""
+"""Cell benchmark: real-time factor, Kinect frame time, perception time, calibration error and time."""
 from __future__ import annotations
 
 import time
@@ -6,6 +6,7 @@ import time
 import numpy as np
 
 from app.bench.geometry import best_time
+from app.calibrate_cell import calibrate_sim_cell
 from app.cell import CellConfig, SimCell
 from app.perception import object_cloud
 from app.spawn import spawn
@@ -24,5 +25,10 @@ def run_cell_benchmark(quick: bool = False, seed: int = 0) -> dict:
         frame_s = best_time(cell.camera.capture, repeats)
         frame = cell.camera.capture()
         perception_s = best_time(lambda: object_cloud(frame, cell.camera.T_base_cam), repeats)
+    with SimCell(CellConfig(camera_seed=seed)) as cell:
+        calibration = calibrate_sim_cell(cell, views=12 if quick else 20, seed=seed)
     return {"quick": quick, "seed": seed, "real_time_factor_moveJ": rtf, "camera_frame_ms": 1000 * frame_s,
-            "perception_ms": 1000 * perception_s}
+            "perception_ms": 1000 * perception_s, "calibration_views": calibration.result.n_views,
+            "calibration_seconds": calibration.seconds, "calibration_error_mm": calibration.error_mm,
+            "calibration_error_deg": calibration.error_deg,
+            "calibration_reprojection_px": calibration.result.reprojection_rms_px}

@@ -6,7 +6,7 @@ import argparse
 from app.commands.output import print_figures
 
 NAME = "bench-cell"
-HELP = "measure the sim cell: real-time factor, camera frame time, perception time"
+HELP = "measure the sim cell: real-time factor, camera frame and perception time, calibration error"
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 from pathlib import Path
 
 NAME = "capture"
@@ -18,7 +19,16 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--category", default="mug", choices=CATEGORIES)
     p.add_argument("--pose", default="upright", choices=["upright", "arbitrary"])  # app.spawn.POSES
     p.add_argument("--seed", type=int, default=0, help="picks the test instance, its pose and the noise")
+    p.add_argument("--calibration", type=Path, default=Path("calibration.json"),
+                   help="camera calibration file; if missing, the cell is calibrated first and it is written")
     p.add_argument("--json", action="store_true", help="print what was saved as JSON")
+
+
+def calibrated_camera_pose(cell, path: Path):
+    """T_base_cam from the calibration file (never the simulator's truth)."""
+    from calibration.store import load_calibration
+
+    return load_calibration(path)[0]
 
 
 def run(args: argparse.Namespace) -> int:
@@ -38,10 +48,17 @@ def run(args: argparse.Namespace) -> int:
     seeds = split(args.category, "test")
     instance = int(seeds[args.seed % len(seeds)])
     with SimCell(CellConfig(camera_seed=args.seed)) as cell:
+        if not args.calibration.exists():
+            from app.calibrate_cell import calibrate_sim_cell, result_record
+            from calibration.store import save_calibration
+
+            print(f"no calibration file {args.calibration}: calibrating the cell first", file=sys.stderr)
+            c = calibrate_sim_cell(cell)
+            save_calibration(args.calibration, c.result.T_base_cam, result_record(c))
         obj = spawn(cell.world, args.category, instance, args.pose, scale=float(rng.uniform(*SCALE_RANGE)), rng=rng)
+        T_base_cam = calibrated_camera_pose(cell, args.calibration)
         frame = cell.camera.capture()
-        # Calibration is not in yet: the camera pose here is the simulator's ground truth.
-        cloud = object_cloud(frame, cell.camera.T_base_cam)
+        cloud = object_cloud(frame, T_base_cam)
         T_obj = cell.world.pose(obj.body)
     with atomic_path(args.out) as tmp:
         ply = tmp.with_suffix(".ply")

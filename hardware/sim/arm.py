@@ -208,11 +208,13 @@ class SimArm(Arm):
         return False
 
     def _arm_contact_force(self) -> float:
-        """Largest normal force on an arm link (fingers excluded) from anything but itself."""
+        """Largest normal force on a moving arm link (not the fingers, not the base bolted to the
+        table) from anything but the robot itself."""
         robot = self.robot
         worst = 0.0
+        ignored = {-1, robot.links["base_link"], *robot.finger_links}
         for c in p.getContactPoints(bodyA=robot.body, physicsClientId=robot.client):
-            if c[2] != robot.body and c[3] not in robot.finger_links:
+            if c[2] != robot.body and c[3] not in ignored:
                 worst = max(worst, c[9])
         return worst
 

@@ -70,11 +70,15 @@ def look_at(eye, target, up=(0.0, 0.0, 1.0)) -> np.ndarray:
 
 
 def gl_projection(K: CameraIntrinsics, near: float = GL_NEAR, far: float = GL_FAR) -> list[float]:
-    """OpenGL projection matrix (column-major list) that reproduces pinhole intrinsics."""
+    """OpenGL projection matrix (column-major list) that reproduces pinhole intrinsics.
+
+    OpenCV puts pixel centres at integer coordinates, OpenGL at half-integers: hence cx + 0.5.
+    """
     W, H = K.width, K.height
+    cx, cy = K.cx + 0.5, K.cy + 0.5
     P = np.array([
-        [2 * K.fx / W, 0.0, 1.0 - 2 * K.cx / W, 0.0],
-        [0.0, 2 * K.fy / H, 2 * K.cy / H - 1.0, 0.0],
+        [2 * K.fx / W, 0.0, 1.0 - 2 * cx / W, 0.0],
+        [0.0, 2 * K.fy / H, 2 * cy / H - 1.0, 0.0],
         [0.0, 0.0, -(far + near) / (far - near), -2 * far * near / (far - near)],
         [0.0, 0.0, -1.0, 0.0],
     ])

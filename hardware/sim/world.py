@@ -51,6 +51,7 @@ class SimWorld:
         self.table: int | None = None
         self.floor: int | None = None
         self.steps = 0
+        self.on_step: list = []  # callables run after every physics step (flange accessories)
 
     @property
     def is_connected(self) -> bool:
@@ -99,6 +100,8 @@ class SimWorld:
         cid = self.require()
         for _ in range(n):
             p.stepSimulation(physicsClientId=cid)
+            for callback in self.on_step:
+                callback()
         self.steps += n
 
     def add_box(self, size, center, mass: float = 0.0, rgba=(0.6, 0.6, 0.6, 1), friction: float = 0.8) -> int:
