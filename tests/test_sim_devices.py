@@ -110,3 +110,20 @@ def test_tcp_pose_matches_ur_convention(rig):
     q = arm.getActualQ()
     assert np.allclose(arm.getActualTCPPose(), pose_to_ur(robot.kinematics.fk(q)))
     assert np.allclose(arm.getTCPOffset()[:3], [0, 0, robot.geometry.tcp_z])
+
+
+def test_stepping_is_deterministic():
+    import numpy as np
+
+    from app.cell import SimCell
+    from app.spawn import spawn
+
+    def run_once():
+        with SimCell() as cell:
+            obj = spawn(cell.world, "bottle", 100_002, "upright", rng=np.random.default_rng(5))
+            cell.arm.moveJ(HOME_Q + 0.3)
+            cell.world.step(120)
+            return np.concatenate([cell.arm.getActualQ(), cell.world.pose(obj.body).ravel()]), cell.camera.capture().depth
+
+    (state_a, depth_a), (state_b, depth_b) = run_once(), run_once()
+    assert np.array_equal(state_a, state_b) and np.array_equal(depth_a, depth_b)

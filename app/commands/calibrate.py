@@ -4,6 +4,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from app.commands.cell_options import add_config_argument, cell_config
 from app.commands.output import print_figures
 
 NAME = "calibrate"
@@ -15,6 +16,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--views", type=int, default=20, help="arm poses to visit (15-30 is usual)")
     p.add_argument("--seed", type=int, default=0, help="draws the poses")
     p.add_argument("--json", action="store_true", help="print the result as JSON")
+    add_config_argument(p)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -24,7 +26,7 @@ def run(args: argparse.Namespace) -> int:
 
     if args.views < 3:
         raise ValueError(f"--views must be at least 3, got {args.views}")
-    with SimCell() as cell:
+    with SimCell(cell_config(args)) as cell:
         calibration = calibrate_sim_cell(cell, views=args.views, seed=args.seed)
     record = result_record(calibration)
     save_calibration(args.out, calibration.result.T_base_cam, record)

@@ -7,6 +7,8 @@ import json
 import sys
 from pathlib import Path
 
+from app.commands.cell_options import add_config_argument, cell_config
+
 NAME = "capture"
 HELP = "capture a single-view object cloud (PLY) and the colour image (PNG) in the sim cell"
 
@@ -22,6 +24,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--calibration", type=Path, default=Path("calibration.json"),
                    help="camera calibration file; if missing, the cell is calibrated first and it is written")
     p.add_argument("--json", action="store_true", help="print what was saved as JSON")
+    add_config_argument(p)
 
 
 def calibrated_camera_pose(cell, path: Path):
@@ -36,7 +39,7 @@ def run(args: argparse.Namespace) -> int:
     import numpy as np
     import open3d as o3d
 
-    from app.cell import CellConfig, SimCell
+    from app.cell import SimCell
     from app.io_utils import atomic_path
     from app.objects import split
     from app.perception import object_cloud
@@ -47,7 +50,7 @@ def run(args: argparse.Namespace) -> int:
     rng = np.random.default_rng(args.seed)
     seeds = split(args.category, "test")
     instance = int(seeds[args.seed % len(seeds)])
-    with SimCell(CellConfig(camera_seed=args.seed)) as cell:
+    with SimCell(cell_config(args)) as cell:
         if not args.calibration.exists():
             from app.calibrate_cell import calibrate_sim_cell, result_record
             from calibration.store import save_calibration

@@ -5,6 +5,8 @@ import argparse
 import json
 import time
 
+from app.commands.cell_options import add_config_argument, cell_config
+
 NAME = "sim"
 HELP = "bring the simulated cell up (UR5, gripper, Kinect v2, rack, shelf) and report its state"
 
@@ -13,16 +15,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--gui", action="store_true", help="open PyBullet's window and keep the cell running")
     p.add_argument("--seed", type=int, default=0, help="camera noise seed")
     p.add_argument("--json", action="store_true", help="print the state as JSON")
+    add_config_argument(p)
 
 
 def run(args: argparse.Namespace) -> int:
-    from dataclasses import replace
+    from app.cell import SimCell
 
-    from app.cell import CellConfig, SimCell
-
-    config = CellConfig(camera_seed=args.seed)
-    config = replace(config, world=replace(config.world, gui=args.gui))
-    with SimCell(config) as cell:
+    with SimCell(cell_config(args, gui=args.gui)) as cell:
         t0 = time.perf_counter()
         frame = cell.camera.capture()
         state = {

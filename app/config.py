@@ -1,0 +1,45 @@
+"""Loading configuration dataclasses from TOML files a user edits.
+
+Each TOML table matches a dataclass field of the same name; keys that the dataclass does not have
+are refused with a one-line error naming the file and the key, so a typo never goes unnoticed.
+"""
+from __future__ import annotations
+
+import dataclasses
+import tomllib
+from pathlib import Path
+from typing import Any, TypeVar, get_type_hints
+
+T = TypeVar("T")
+
+
+def from_dict(cls: type[T], data: dict[str, Any], where: str = "") -> T:
+    """Build dataclass `cls` from a nested dict, starting from its defaults."""
+    hints = get_type_hints(cls)
+    names = {f.name for f in dataclasses.fields(cls)}
+    values = {}
+    for key, value in data.items():
+        if key not in names:
+            raise ValueError(f"{where}unknown setting {key!r} for {cls.__name__} (known: {', '.join(sorted(names))})")
+        hint = hints[key]
+        if dataclasses.is_dataclass(hint):
+            if not isinstance(value, dict):
+                raise ValueError(f"{where}{key!r} must be a table")
+            values[key] = from_dict(hint, value, where)
+        elif isinstance(value, list):
+            values[key] = tuple(tuple(v) if isinstance(v, list) else v for v in value)
+        else:
+            values[key] = value
+    return dataclasses.replace(cls(), **values)
+
+
+def load_toml(cls: type[T], path: str | Path) -> T:
+    """Dataclass `cls` from a TOML file, or a one-line error naming the file and the problem."""
+    path = Path(path)
+    if not path.exists():
+        raise FileNotFoundError(f"{path}: no such configuration file")
+    try:
+        data = tomllib.loads(path.read_text())
+    except tomllib.TOMLDecodeError as exc:
+        raise ValueError(f"{path}: not valid TOML ({exc})") from exc
+    return from_dict(cls, data, where=f"{path}: ")
