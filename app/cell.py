@@ -8,7 +8,7 @@ from the front. Edit `CellConfig` (or its TOML, later) to move things.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from app.se3 import invert, make_pose, random_poses, rotation_angle
-from calibration.board import BoardSpec, Detection
+from calibration.board import Detection
 from calibration.eye_to_hand import Observation, solve
 from calibration.store import FORMAT, load_calibration, save_calibration
 from hardware.sim.kinect import KINECT_V2_DEPTH

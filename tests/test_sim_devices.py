@@ -127,3 +127,25 @@ def test_stepping_is_deterministic():
 
     (state_a, depth_a), (state_b, depth_b) = run_once(), run_once()
     assert np.array_equal(state_a, state_b) and np.array_equal(depth_a, depth_b)
+
+
+def test_execute_trajectory_and_stop(rig):
+    import pybullet as p
+
+    world, robot, arm, _ = rig
+    q0 = arm.getActualQ()
+    times = np.linspace(0.0, 2.0, 41)
+    s = (1 - np.cos(np.pi * times / 2.0)) / 2  # rest to rest
+    q = q0 + s[:, None] * np.array([0.4, 0.2, -0.2, 0.3, 0.2, 0.5])
+    assert arm.executeTrajectory(times, q), arm.getLastError()
+    assert np.abs(arm.getActualQ() - q[-1]).max() < 2e-3
+    with pytest.raises(ValueError, match="does not start"):
+        arm.executeTrajectory(times, q + 0.1)
+    with pytest.raises(ValueError, match="increasing times"):
+        arm.executeTrajectory(times[::-1], q)
+    # a moving arm brought to rest by stopJ
+    for j, qd in zip(robot.arm_joints, [0.8, -0.5, 0.4, 0.0, 0.0, 0.6]):
+        p.resetJointState(robot.body, j, p.getJointState(robot.body, j)[0], qd)
+    arm.stopJ(deceleration=4.0)
+    world.step(24)
+    assert np.abs(arm.getActualQd()).max() < 0.01

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pybullet as p
 
-from hardware.sim.gripper_model import FINGER_JOINTS, FINGER_LINKS, GripperGeometry, standalone_gripper_urdf
+from hardware.sim.gripper_model import FINGER_JOINTS, GripperGeometry, standalone_gripper_urdf
 from hardware.robot_description import write_cached
 from hardware.sim.world import SimWorld, pose_to_pybullet
 
