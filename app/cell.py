@@ -17,7 +17,7 @@ from app.objects.collision import collision_model, visual_model
 from app.se3 import make_pose, rotvec_to_matrix
 from hardware.sim.arm import SimArm, SimArmConfig
 from hardware.sim.gripper import SimGripper, SimGripperConfig
-from hardware.sim.kinect import SimKinect, SimKinectConfig, look_at
+from hardware.sim.kinect import NoiseModel, SimKinect, SimKinectConfig, look_at
 from hardware.sim.robot import SimRobot
 from hardware.sim.world import SimWorld, SimWorldConfig
 
@@ -48,8 +48,6 @@ class SimCell:
     """Brings the whole simulated cell up and down; exposes arm, gripper and camera devices."""
 
     def __init__(self, config: CellConfig = CellConfig()) -> None:
-        from hardware.sim.kinect import NoiseModel
-
         self.config = config
         self.world = SimWorld(config.world)
         self.robot = SimRobot(self.world)

@@ -44,11 +44,10 @@ def sample_pose(mesh: trimesh.Trimesh, pose: str, rng: np.random.Generator) -> n
     (x0, x1), (y0, y1) = WORKSPACE
     R = rotvec_to_matrix([0, 0, rng.uniform(-np.pi, np.pi)]) if pose == "upright" else random_rotations(1, rng)[0]
     xy = [rng.uniform(x0, x1), rng.uniform(y0, y1)]
-    z = -(mesh.vertices @ R.T)[:, 2].min() + (0.0 if pose == "upright" else 0.005)
+    rotated = mesh.vertices @ R.T
+    z = -rotated[:, 2].min() + (0.0 if pose == "upright" else 0.005)
     T = make_pose(R, [*xy, z])
-    # centre the object's bounding box over the sampled point, not its canonical origin
-    centre = (mesh.vertices @ R.T).mean(axis=0)
-    T[:2, 3] -= centre[:2]
+    T[:2, 3] -= rotated.mean(axis=0)[:2]  # centre the object, not its canonical origin, on the sample
     return T
 
 

@@ -18,11 +18,11 @@ GRASP_DEPTH = {"mug": 0.025, "bowl": 0.012, "vase": 0.02}  # fingertips below th
 TIP_BELOW_TCP = 0.02  # fingertips are this far along the tool z past the TCP (GripperGeometry)
 
 
-def outer_radius_at(mesh: trimesh.Trimesh, z: float) -> float:
-    """Outer radius of a body of revolution at height z, on its -x side (ray cast from outside)."""
+def outer_radii_at(mesh: trimesh.Trimesh, heights: list[float]) -> np.ndarray:
+    """Outer radius of a body of revolution at each height, on its -x side (rays cast from outside)."""
     far = float(mesh.extents.max()) * 2
-    hit = cast(make_scene(mesh.vertices, mesh.faces), np.array([[-far, 0.0, z, 1.0, 0.0, 0.0]]))[0]
-    return far - float(hit)
+    rays = np.array([[-far, 0.0, z, 1.0, 0.0, 0.0] for z in heights])
+    return far - cast(make_scene(mesh.vertices, mesh.faces), rays).astype(np.float64)
 
 
 def grasp_pose(mesh: trimesh.Trimesh) -> np.ndarray:
@@ -38,7 +38,7 @@ def grasp_pose(mesh: trimesh.Trimesh) -> np.ndarray:
     wall = (sem.rim_radius - (sem.rim_inner_radius or sem.rim_radius)) * scale
     top = sem.rim_height * scale
     depth = GRASP_DEPTH[sem.category] * scale
-    r_top, r_low = outer_radius_at(mesh, top - 0.002), outer_radius_at(mesh, top - depth)
+    r_top, r_low = outer_radii_at(mesh, [top - 0.002, top - depth])
     tilt = np.arctan2(r_top - r_low, depth - 0.002)  # wall leans outwards by this angle
     # tool z down along the wall (towards the axis as it descends), y across the wall, x tangential
     z_axis = np.array([np.sin(tilt), 0.0, -np.cos(tilt)])

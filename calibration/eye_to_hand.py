@@ -120,11 +120,9 @@ def aim_poses(n: int, look_at: np.ndarray, rng: np.random.Generator, centre=(0.5
         x /= np.linalg.norm(x)
         R = np.column_stack([x, np.cross(z, x), z])
         # a rotation of at most max_tilt_deg: scale the Haar sample's rotation vector down
-        from scipy.spatial.transform import Rotation
-
-        v = Rotation.from_matrix(R_tilt).as_rotvec()
+        v = matrix_to_rotvec(R_tilt)
         v *= np.radians(max_tilt_deg) * rng.uniform(0.3, 1.0) / max(np.linalg.norm(v), 1e-9)
-        poses.append(make_pose(R @ Rotation.from_rotvec(v).as_matrix(), p))
+        poses.append(make_pose(R @ rotvec_to_matrix(v), p))
     return poses
 
 

@@ -5,8 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pybullet as p
 
-from hardware.sim.gripper_model import FINGER_JOINTS, GripperGeometry, standalone_gripper_urdf
+from hardware.sim.gripper_model import FINGER_JOINTS, FINGER_LINKS, GripperGeometry, standalone_gripper_urdf
 from hardware.robot_description import write_cached
+from hardware.sim.robot import joint_and_link_indices, set_pad_friction
 from hardware.sim.world import SimWorld, pose_to_pybullet
 
 
@@ -33,14 +34,12 @@ class FloatingGripper:
         path = write_cached("nift_gripper", standalone_gripper_urdf(self.geometry))
         pos, quat = pose_to_pybullet(self.T)
         self.body = p.loadURDF(str(path), pos, quat, physicsClientId=self.client)
-        names = {p.getJointInfo(self.body, j, physicsClientId=self.client)[1].decode(): j
-                 for j in range(p.getNumJoints(self.body, physicsClientId=self.client))}
-        self.finger_joints = [names[n] for n in FINGER_JOINTS]
-        self.finger_links = list(self.finger_joints)  # a joint's child link has the joint's index
+        joints, links = joint_and_link_indices(self.body, self.client)
+        self.finger_joints = [joints[n] for n in FINGER_JOINTS]
+        self.finger_links = [links[n] for n in FINGER_LINKS]
         for j in self.finger_joints:
             p.resetJointState(self.body, j, self.geometry.stroke / 2, physicsClientId=self.client)
-            p.changeDynamics(self.body, j, lateralFriction=self.geometry.pad_friction, spinningFriction=0.01,
-                             frictionAnchor=1, physicsClientId=self.client)
+        set_pad_friction(self.body, self.finger_links, self.geometry, self.client)
         self.constraint = p.createConstraint(self.body, -1, -1, -1, p.JOINT_FIXED, [0, 0, 0], [0, 0, 0], pos, [0, 0, 0, 1],
                                              quat, physicsClientId=self.client)
         p.changeConstraint(self.constraint, pos, quat, maxForce=2000, physicsClientId=self.client)

@@ -25,6 +25,23 @@ def cell_robot_urdf(geometry: GripperGeometry = GripperGeometry()) -> str:
     return text[:cut] + gripper_urdf_fragment(geometry) + "\n" + text[cut:]
 
 
+def joint_and_link_indices(body: int, client: int) -> tuple[dict[str, int], dict[str, int]]:
+    """({joint name: index}, {child link name: index}) of a multibody (a link's index is its joint's)."""
+    joints, links = {}, {}
+    for j in range(p.getNumJoints(body, physicsClientId=client)):
+        info = p.getJointInfo(body, j, physicsClientId=client)
+        joints[info[1].decode()] = j
+        links[info[12].decode()] = j
+    return joints, links
+
+
+def set_pad_friction(body: int, finger_links: list[int], geometry: GripperGeometry, client: int) -> None:
+    """Give the finger links the gripper's pad friction."""
+    for link in finger_links:
+        p.changeDynamics(body, link, lateralFriction=geometry.pad_friction, spinningFriction=0.01,
+                         frictionAnchor=1, physicsClientId=client)
+
+
 class SimRobot:
     """Loads the UR5 + gripper into a world once and knows its joint and link indices."""
 
@@ -52,17 +69,11 @@ class SimRobot:
         pos, quat = pose_to_pybullet(T_world_root)
         self.body = p.loadURDF(str(path), pos, quat, useFixedBase=True,
                                flags=p.URDF_USE_SELF_COLLISION_EXCLUDE_PARENT, physicsClientId=self.client)
-        names = {}
-        for j in range(p.getNumJoints(self.body, physicsClientId=self.client)):
-            info = p.getJointInfo(self.body, j, physicsClientId=self.client)
-            names[info[1].decode()] = j
-            self.links[info[12].decode()] = j
+        names, self.links = joint_and_link_indices(self.body, self.client)
         self.arm_joints = [names[n] for n in JOINT_NAMES]
         self.finger_joints = [names[n] for n in FINGER_JOINTS]
         self.finger_links = [self.links[n] for n in FINGER_LINKS]
-        for link in self.finger_links:
-            p.changeDynamics(self.body, link, lateralFriction=self.geometry.pad_friction,
-                             spinningFriction=0.01, frictionAnchor=1, physicsClientId=self.client)
+        set_pad_friction(self.body, self.finger_links, self.geometry, self.client)
         self.reset_arm(HOME_Q)
         return self.body
 
