@@ -6,9 +6,10 @@ import signal
 import sys
 
 from app import __version__
-from app.commands import bench_cell, bench_geometry, calibrate, capture, objects, sim
+from app.commands import (bench_cell, bench_field, bench_geometry, calibrate, capture, make_data, objects, sim,
+                          train)
 
-COMMANDS = [objects, sim, calibrate, capture, bench_geometry, bench_cell]
+COMMANDS = [objects, sim, calibrate, capture, make_data, train, bench_geometry, bench_cell, bench_field]
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -1,0 +1,108 @@
+"""Field training data: camera views, labels, determinism, resume, and the make-data/train verbs."""
+import json
+
+import numpy as np
+import pytest
+
+from app.cli import main
+from app.nift.raycast import scene_of, unsigned_distance
+from app.nift.scf import compute_scf
+from app.objects import generate
+from app.training.data import DataConfig, make_dataset, shard_name
+from app.training.dataset import FieldData
+from app.training.views import camera_poses, kinect_cloud, observe
+from hardware.sim.kinect import NoiseModel
+
+TINY = DataConfig(instances=2, views=2, queries=200, shard_instances=2, seed=5)
+
+
+def mug_scene():
+    mesh = generate("mug", 3)
+    center = mesh.bounds.mean(axis=0)
+    return mesh, scene_of(mesh), center, float(np.linalg.norm(mesh.vertices - center, axis=1).max())
+
+
+def test_windowed_rays_see_exactly_what_the_full_image_sees():
+    _, scene, center, radius = mug_scene()
+    for seed in range(3):
+        T = camera_poses("single", np.eye(3), center, np.random.default_rng(seed))[0]
+        full = kinect_cloud(scene, T, np.random.default_rng(0))
+        window = kinect_cloud(scene, T, np.random.default_rng(0), sphere=(center, radius))
+        assert len(full) > 300 and np.array_equal(full, window)
+
+
+def test_noise_free_views_lie_on_the_surface_and_noise_is_millimetres():
+    mesh, scene, center, radius = mug_scene()
+    T = camera_poses("single", np.eye(3), center, np.random.default_rng(1))[0]
+    exact = kinect_cloud(scene, T, np.random.default_rng(0), NoiseModel(enabled=False))
+    noisy = kinect_cloud(scene, T, np.random.default_rng(0))
+    assert unsigned_distance(scene, exact).max() < 0.0008  # only the 1 mm depth quantisation
+    # same pixels in the same order; the range error along each ray is the Kinect's axial noise
+    along = np.linalg.norm(noisy - T[:3, 3], axis=1) - np.linalg.norm(exact - T[:3, 3], axis=1)
+    assert 0.0006 < along.std() < 0.002  # sigma(z ~ 0.7-1.1 m) = 0.8-1.3 mm plus quantisation
+    # the camera sees one side: every point faces the camera
+    assert np.all(np.linalg.norm(exact - T[:3, 3], axis=1) < np.linalg.norm(center - T[:3, 3]) + radius)
+
+
+def test_fused_views_cover_more_of_the_object_than_one():
+    mesh, scene, center, radius = mug_scene()
+    rng = np.random.default_rng(0)
+    surface = mesh.sample(3000, seed=1)
+    for camera, lo, hi in (("single", 0.0, 0.65), ("fused", 0.75, 1.0)):
+        cloud = observe(scene, camera, np.eye(3), center, radius, 1024, rng)
+        assert cloud.shape == (1024, 3)
+        near = np.min(np.linalg.norm(surface[:, None] - cloud[None, ::4], axis=-1), axis=1) < 0.01
+        assert lo <= near.mean() <= hi, (camera, near.mean())
+
+
+def test_make_data_is_deterministic_resumable_and_labels_are_right(tmp_path):
+    a, b = tmp_path / "a", tmp_path / "b"
+    report = make_dataset(TINY, a, workers=1, progress=False)
+    assert report.figures()["samples"] == 3 * 2 * 2 and report.manifest["complete"]
+    make_dataset(TINY, b, workers=1, progress=False)
+    for i in range(3):
+        assert (a / shard_name(i)).read_bytes() == (b / shard_name(i)).read_bytes()
+    # interrupt: lose a shard, resume, get the same bytes back
+    original = (a / shard_name(1)).read_bytes()
+    (a / shard_name(1)).unlink()
+    again = make_dataset(TINY, a, workers=1, progress=False)
+    assert again.new_samples == 4 and (a / shard_name(1)).read_bytes() == original
+    # labels: SCF recomputed from the mesh at the stored canonical points
+    data = FieldData(a)
+    cat, seed = TINY.categories[data.category[0]], int(data.seed[0])
+    scf = compute_scf(generate(cat, seed), data.queries[0, :20], order=10)
+    np.testing.assert_allclose(data.scf[0, :20].astype(np.float32), scf, rtol=2e-3, atol=2e-3)
+    # a batch puts the queries in the sample's pose: x = R (s q), so |x| = s |q|
+    batch = data.batch(np.array([0]), 64, 32, 5, np.random.default_rng(0))
+    assert batch["scf"].shape == (1, 32, 6) and batch["cloud"].shape == (1, 64, 3)
+    with pytest.raises(ValueError, match="different config"):
+        make_dataset(DataConfig(instances=2, views=3, queries=200, shard_instances=2, seed=5), a, workers=1,
+                     progress=False)
+
+
+def test_bad_data_requests_are_refused(tmp_path):
+    with pytest.raises(ValueError, match="unknown object category"):
+        DataConfig(categories=("teapot",))
+    with pytest.raises(ValueError, match="unknown camera setting"):
+        DataConfig(camera="stereo")
+    with pytest.raises(FileNotFoundError, match="nift make-data"):
+        FieldData(tmp_path)
+    (tmp_path / "manifest.json").write_text("{")
+    with pytest.raises(ValueError, match="not valid JSON"):
+        FieldData(tmp_path)
+
+
+def test_make_data_and_train_verbs_quick(tmp_path, capsys):
+    data = tmp_path / "data"
+    assert main(["make-data", "--out", str(data), "--quick", "--workers", "1", "--json"]) == 0
+    figures = json.loads(capsys.readouterr().out)
+    assert figures["samples"] == 3 * 3 * 2 and figures["complete"]
+    assert main(["train", "--target", "occ", "--data", str(data), "--eval-data", str(data),
+                 "--out", str(tmp_path / "run"), "--quick", "--json"]) == 0
+    card = json.loads(capsys.readouterr().out)
+    assert card["name"] == "NDF" and 0.0 <= card["test"]["occ_accuracy"] <= 1.0
+    assert (tmp_path / "run" / "field.pt").is_file() and (tmp_path / "run" / "last.pt").is_file()
+    # resume: a second run with one more epoch continues from the checkpoint
+    assert main(["train", "--target", "occ", "--data", str(data), "--out", str(tmp_path / "run"),
+                 "--quick", "--epochs", "2", "--resume", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["training"]["epochs"] == 2
