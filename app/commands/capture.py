@@ -27,19 +27,24 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     add_config_argument(p)
 
 
-def calibrated_camera_pose(cell, path: Path):
-    """T_base_cam from the calibration file (never the simulator's truth)."""
-    from calibration.store import load_calibration
+def ensure_calibration(cell, path: Path):
+    """T_base_cam from the calibration file (never the simulator's truth); calibrate first if it is missing."""
+    from calibration.store import load_calibration, save_calibration
 
+    if not path.exists():
+        from app.calibrate_cell import calibrate_sim_cell, result_record
+
+        print(f"no calibration file {path}: calibrating the cell first", file=sys.stderr)
+        c = calibrate_sim_cell(cell)
+        save_calibration(path, c.result.T_base_cam, result_record(c))
     return load_calibration(path)[0]
 
 
 def run(args: argparse.Namespace) -> int:
     import matplotlib.image
     import numpy as np
-    import open3d as o3d
-
     from app.cell import SimCell
+    from app.cloud_io import save_cloud
     from app.io_utils import atomic_path
     from app.objects import split
     from app.perception import object_cloud
@@ -51,22 +56,12 @@ def run(args: argparse.Namespace) -> int:
     seeds = split(args.category, "test")
     instance = int(seeds[args.seed % len(seeds)])
     with SimCell(cell_config(args)) as cell:
-        if not args.calibration.exists():
-            from app.calibrate_cell import calibrate_sim_cell, result_record
-            from calibration.store import save_calibration
-
-            print(f"no calibration file {args.calibration}: calibrating the cell first", file=sys.stderr)
-            c = calibrate_sim_cell(cell)
-            save_calibration(args.calibration, c.result.T_base_cam, result_record(c))
+        T_base_cam = ensure_calibration(cell, args.calibration)
         obj = spawn(cell.world, args.category, instance, args.pose, scale=float(rng.uniform(*SCALE_RANGE)), rng=rng)
-        T_base_cam = calibrated_camera_pose(cell, args.calibration)
         frame = cell.camera.capture()
         cloud = object_cloud(frame, T_base_cam)
         T_obj = cell.world.pose(obj.body)
-    with atomic_path(args.out) as tmp:
-        ply = tmp.with_suffix(".ply")
-        o3d.io.write_point_cloud(str(ply), o3d.geometry.PointCloud(o3d.utility.Vector3dVector(cloud)))
-        ply.replace(tmp)
+    save_cloud(args.out, cloud)
     with atomic_path(args.image) as tmp:
         matplotlib.image.imsave(tmp, frame.color, format="png")
     report = {"cloud": str(args.out), "points": len(cloud), "image": str(args.image), "category": args.category,

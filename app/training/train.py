@@ -37,6 +37,7 @@ class TrainConfig:
     cloud_points: int = 512  # random subset of each 1,024-point cloud per step (augmentation, 2x faster)
     query_points: int = 500
     val_fraction: float = 0.1
+    val_samples: int = 256  # validation after each epoch uses this fixed subset (full set: 10x the time)
     minutes: float | None = None  # wall-clock budget; None = run all epochs
     seed: int = 0
 
@@ -67,23 +68,27 @@ def load_checkpoint(path: Path, model: NeuralField, opt: torch.optim.Optimizer) 
 
 def run_epoch(model, opt, data: FieldData, idx: np.ndarray, cfg: TrainConfig, rng: np.random.Generator,
               deadline: float | None, bar: tqdm) -> tuple[float, int, bool]:
-    """One pass over idx in random batches: (mean loss, steps, finished before the deadline)."""
+    """One pass over idx in random batches: (mean loss, steps, finished). The deadline or Ctrl-C
+    ends it early at a step boundary (finished = False); the caller then checkpoints and evaluates."""
     model.train()
     order = rng.permutation(idx)
     total, steps = 0.0, 0
-    for start in range(0, len(order) - cfg.batch_size + 1, cfg.batch_size):
-        if deadline is not None and time.monotonic() > deadline:
-            return total / max(steps, 1), steps, False
-        batch = data.batch(order[start:start + cfg.batch_size], cfg.cloud_points, cfg.query_points,
-                           cfg.field.scf_order, rng)
-        batch = {k: v.to(model.device) for k, v in batch.items()}
-        loss = loss_of(model, batch)
-        opt.zero_grad()
-        loss.backward()
-        opt.step()
-        total, steps = total + loss.item(), steps + 1
-        bar.update(cfg.batch_size)
-        bar.set_postfix(loss=f"{total / steps:.4f}")
+    try:
+        for start in range(0, len(order) - cfg.batch_size + 1, cfg.batch_size):
+            if deadline is not None and time.monotonic() > deadline:
+                return total / max(steps, 1), steps, False
+            batch = data.batch(order[start:start + cfg.batch_size], cfg.cloud_points, cfg.query_points,
+                               cfg.field.scf_order, rng)
+            batch = {k: v.to(model.device) for k, v in batch.items()}
+            loss = loss_of(model, batch)
+            opt.zero_grad()
+            loss.backward()
+            opt.step()
+            total, steps = total + loss.item(), steps + 1
+            bar.update(cfg.batch_size)
+            bar.set_postfix(loss=f"{total / steps:.4f}")
+    except KeyboardInterrupt:
+        return total / max(steps, 1), steps, False
     return total / max(steps, 1), steps, True
 
 
@@ -96,6 +101,7 @@ def train(cfg: TrainConfig, data_dir: str | Path, out: str | Path, eval_dir: str
     device = pick_device()
     data = FieldData(data_dir)
     train_idx, val_idx = data.split(cfg.val_fraction, cfg.seed)
+    val_idx = np.random.default_rng(cfg.seed).permutation(val_idx)[:cfg.val_samples]
     model = NeuralField(cfg.field).to(device)
     if cfg.field.target == "scf":
         bands = data.scf[np.unique(data.sample_instance[train_idx]), :, :cfg.field.out_dim].astype(np.float64)

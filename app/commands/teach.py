@@ -1,0 +1,83 @@
+"""`nift teach`: record verified demos of a task in the sim cell and rebuild its templates."""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+from app.commands.cell_options import add_config_argument, cell_config
+
+NAME = "teach"
+HELP = "record demos of a task (scripted teacher or your poses), verify them, rebuild the task's NIT"
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--task", required=True, choices=["mug", "bowl", "bottle"], help="which task to teach")
+    p.add_argument("--demos", type=int, default=10, help="verified demos to record (default 10)")
+    p.add_argument("--out", type=Path, help="task directory (default demos/<task>); demos there are replaced")
+    p.add_argument("--poses", type=Path, help="JSON with your poses for ONE demo: {\"instance\": seed, "
+                   "\"T_obj_tcp\": 4x4, \"T_fixture_obj\": 4x4}; default: the scripted teacher")
+    p.add_argument("--rebuild", action="store_true", help="only rebuild the templates from the demos there")
+    p.add_argument("--calibration", type=Path, default=Path("calibration.json"),
+                   help="camera calibration file; if missing, the cell is calibrated first and it is written")
+    p.add_argument("--seed", type=int, default=0, help="which train-split instances are used, and their poses")
+    p.add_argument("--json", action="store_true", help="print what was recorded as JSON")
+    add_config_argument(p)
+
+
+def read_poses(path: Path):
+    """An operator's poses file -> (instance seed, TaughtPoses)."""
+    import numpy as np
+
+    from app.recorder import TaughtPoses
+
+    if not path.is_file():
+        raise FileNotFoundError(f"no poses file at {path}")
+    try:
+        data = json.loads(path.read_text())
+        return int(data["instance"]), TaughtPoses(np.array(data["T_obj_tcp"], float).reshape(4, 4),
+                                                  np.array(data["T_fixture_obj"], float).reshape(4, 4))
+    except (json.JSONDecodeError, KeyError, ValueError, TypeError) as exc:
+        raise ValueError(f"{path}: expected JSON with instance, T_obj_tcp and T_fixture_obj ({exc})") from None
+
+
+def run(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    from app.cell import SimCell
+    from app.recorder import DEMOS_DIR, record_demo, record_task, task_demos, task_templates
+    from app.tasks import task
+
+    t = task(args.task)
+    out = args.out or DEMOS_DIR / t.name
+    log = (lambda line: print(line, file=sys.stderr)) if args.json else print
+    recorded = []
+    if not args.rebuild:
+        with SimCell(cell_config(args)) as cell:
+            from app.commands.capture import ensure_calibration
+
+            T_base_cam = ensure_calibration(cell, args.calibration)
+            if args.poses:
+                from app.demo import save_demo
+
+                instance, poses = read_poses(args.poses)
+                n = len(list(out.glob("demo-*.npz")))
+                demo, why = record_demo(cell, t, instance, T_base_cam, np.random.default_rng(args.seed), poses,
+                                        name=f"demo-{n:02d}")
+                if demo is None:
+                    raise ValueError(f"the demo was not kept: {why}")
+                recorded = [save_demo(demo, out / f"{demo.name}.npz")]
+            else:
+                for old in out.glob("demo-*.npz"):
+                    old.unlink()
+                recorded = record_task(cell, t, args.demos, out, T_base_cam, args.seed, report=log)
+    templates = task_templates(t, out, rebuild=True)
+    report = {"task": t.name, "directory": str(out), "recorded": [str(p) for p in recorded],
+              "demos": len(task_demos(out)),
+              "templates": {s: {"points": len(tp.points), "feature_dim": int(tp.features.shape[1])}
+                            for s, tp in templates.items()}}
+    sizes = ", ".join(f"{stage} {len(tp.points)} points" for stage, tp in templates.items())
+    print(json.dumps(report, indent=2) if args.json else
+          f"{t.name}: {len(recorded)} demos recorded, {report['demos']} in {out}; templates rebuilt ({sizes})")
+    return 0

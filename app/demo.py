@@ -1,0 +1,82 @@
+"""A recorded demonstration and its file (format nift-demo/1: an .npz with a JSON header).
+
+A demo holds what an operator's teach-in leaves behind: the single-view object cloud the camera
+saw (base frame), the camera's intrinsics and extrinsics, the object's category / seed / scale /
+pose, the grasp (T_base_tcp), the place (T_fixture_obj: the object relative to the rack or
+shelf) and the fixture's pose in the base frame.
+"""
+from __future__ import annotations
+
+import json
+import zipfile
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from app.io_utils import atomic_path
+from app.se3 import invert
+
+FORMAT = "nift-demo/1"
+POSES = ("T_base_obj", "T_base_tcp", "T_fixture_obj", "T_base_fixture", "T_base_cam")
+
+
+@dataclass
+class Demo:
+    """One verified demonstration of a task."""
+
+    task: str
+    cloud: np.ndarray  # (N, 3) base frame
+    T_base_obj: np.ndarray
+    T_base_tcp: np.ndarray  # grasp
+    T_fixture_obj: np.ndarray  # place, relative to the fixture
+    T_base_fixture: np.ndarray
+    T_base_cam: np.ndarray
+    intrinsics: dict  # width, height, fx, fy, cx, cy
+    category: str
+    seed: int
+    scale: float
+    name: str = ""
+    verdicts: dict = field(default_factory=dict)
+
+    def grasp_anchor(self) -> np.ndarray:
+        """The gripper's pose in the cloud's frame (for the grasp template)."""
+        return self.T_base_tcp
+
+    def place_anchor(self) -> np.ndarray:
+        """Where the fixture would be, in the cloud's frame, for the object to sit as placed."""
+        return self.T_base_obj @ invert(self.T_fixture_obj)
+
+
+def save_demo(demo: Demo, path: str | Path) -> Path:
+    """Write a demo atomically."""
+    header = {"format": FORMAT, "task": demo.task, "category": demo.category, "seed": demo.seed,
+              "scale": demo.scale, "name": demo.name, "intrinsics": demo.intrinsics, "verdicts": demo.verdicts,
+              **{k: np.asarray(getattr(demo, k)).tolist() for k in POSES}}
+    with atomic_path(path) as tmp:
+        with open(tmp, "wb") as fh:
+            np.savez(fh, header=np.array(json.dumps(header)), cloud=np.asarray(demo.cloud, dtype=np.float32))
+    return Path(path)
+
+
+def load_demo(path: str | Path) -> Demo:
+    """Read a demo; missing, corrupt, foreign and wrong-version files get a one-line error."""
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"no demo at {path}")
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            header = json.loads(str(z["header"]))
+            cloud = z["cloud"].astype(np.float64)
+    except (zipfile.BadZipFile, ValueError, KeyError, OSError, EOFError) as exc:
+        raise ValueError(f"{path} is not a readable demo file ({type(exc).__name__})") from None
+    if not isinstance(header, dict) or header.get("format") != FORMAT:
+        found = header.get("format") if isinstance(header, dict) else None
+        raise ValueError(f"{path}: expected format {FORMAT!r}, found {found!r}")
+    try:
+        poses = {k: np.array(header[k], dtype=np.float64).reshape(4, 4) for k in POSES}
+        return Demo(header["task"], cloud, category=header["category"], seed=int(header["seed"]),
+                    scale=float(header["scale"]), name=header.get("name", ""), intrinsics=header["intrinsics"],
+                    verdicts=header.get("verdicts", {}), **poses)
+    except (KeyError, ValueError, TypeError) as exc:
+        raise ValueError(f"{path}: demo header is incomplete ({exc})") from None

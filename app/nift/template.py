@@ -1,0 +1,147 @@
+"""Neural Interaction Template (NIT, paper Sec. III-B and III-D): query points in the anchor's frame
+and the features they have in the demo objects' fields.
+
+One demo d: the anchor A (gripper, rack or shelf; a mesh in its own frame) at pose T_d (the demo
+object's cloud frame, usually the robot base), the demo object's cloud O_d. Query points X_d:
+
+    ibs: importance-sampled on the IBS between A (posed) and O_d   (the paper's NIT)
+    bps: uniform in A's bounding box                                 (NDF's query points, a baseline)
+
+stored in the anchor frame, so all demos share one frame. Several demos: the union of their
+points is resampled back to M points with probability proportional to a density weight,
+
+    w(x) = 1 / mean_{k nearest} |x - x_k|,   k = number of demos    (more weight where demos agree)
+
+and the template feature of a point is the mean over demos of f(T_d x | O_d).
+Features: "nif" (all NIF decoder activations), "ndf" (all NDF activations), "scf" (the NIF's
+predicted SCF c_0..c_n).
+"""
+from __future__ import annotations
+
+import hashlib
+import json
+import zipfile
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import torch
+from scipy.spatial import cKDTree
+
+from app.io_utils import atomic_path
+from app.nift.field import NeuralField, field_path, load_field
+from app.nift.ibs import compute_ibs
+from app.se3 import invert, transform_points
+
+FORMAT = "nift-nit/1"
+QUERIES = ("ibs", "bps")
+FEATURES = {"nif": "nif", "ndf": "ndf", "scf": "nif"}  # feature kind -> the field it comes from
+
+
+@dataclass
+class Template:
+    """Query points (anchor frame) with their demo-averaged features."""
+
+    points: np.ndarray  # (M, 3) anchor frame
+    features: np.ndarray  # (M, F)
+    anchor: str  # "gripper", "rack", "shelf"
+    query: str  # "ibs" or "bps"
+    feature: str  # "nif", "ndf" or "scf"
+    field_id: str  # which weights made the features (name + sha256 prefix)
+    demos: list[str] = field(default_factory=list)
+
+
+def field_id(name_or_path: str | Path) -> str:
+    """A field's identity: its name and the first 12 hex digits of its weights' sha256."""
+    path = field_path(name_or_path)
+    return f"{Path(path).stem}:{hashlib.sha256(path.read_bytes()).hexdigest()[:12]}"
+
+
+def point_features(field: NeuralField, feature: str, cloud: np.ndarray, points) -> torch.Tensor:
+    """Features (B, T, F) of points (B, T, 3) in the field of one cloud (N, 3), differentiable in points."""
+    latent = field.encode(cloud)
+    if feature == "scf":
+        return field.predict(latent, points)
+    return field.features(latent, points)
+
+
+def query_points(kind: str, anchor_mesh, T_frame_anchor: np.ndarray, cloud: np.ndarray, n: int,
+                 seed: int = 0) -> np.ndarray:
+    """Query points (n, 3) of one demo in the anchor frame."""
+    if kind not in QUERIES:
+        raise ValueError(f"unknown query points {kind!r}; choose one of {', '.join(QUERIES)}")
+    rng = np.random.default_rng(seed)
+    if kind == "bps":
+        lo, hi = anchor_mesh.bounds
+        return rng.uniform(lo, hi, size=(n, 3))
+    posed = anchor_mesh.copy().apply_transform(T_frame_anchor)
+    ibs = compute_ibs(posed, cloud, n_points=n, seed=seed)
+    return transform_points(invert(T_frame_anchor), ibs.points)
+
+
+def density_resample(points: np.ndarray, n: int, k: int, rng: np.random.Generator) -> np.ndarray:
+    """n of points (P, 3), drawn without replacement with weight 1 / (mean distance to k nearest)."""
+    if n > len(points):
+        raise ValueError(f"cannot resample {n} points from {len(points)}")
+    d = cKDTree(points).query(points, k=k + 1)[0][:, 1:]  # (P, k), self excluded
+    w = 1.0 / np.maximum(d.mean(axis=1), 1e-9)
+    return points[rng.choice(len(points), size=n, replace=False, p=w / w.sum())]
+
+
+def build_template(anchor: str, anchor_mesh, demos: list[dict], query: str = "ibs", feature: str = "nif",
+                   n_points: int = 500, weights: str | Path | None = None, seed: int = 0) -> Template:
+    """A NIT from demos, each {"cloud": (N, 3), "T_frame_anchor": (4, 4), "name": str}.
+
+    `weights`: the field to use (default: the shipped field the feature comes from)."""
+    if feature not in FEATURES:
+        raise ValueError(f"unknown feature {feature!r}; choose one of {', '.join(FEATURES)}")
+    if not demos:
+        raise ValueError("a template needs at least one demo")
+    weights = weights or FEATURES[feature]
+    field = load_field(weights)
+    rng = np.random.default_rng(seed)
+    per_demo = [query_points(query, anchor_mesh, d["T_frame_anchor"], d["cloud"], n_points, seed + i)
+                for i, d in enumerate(demos)]
+    points = per_demo[0] if len(demos) == 1 else density_resample(np.concatenate(per_demo), n_points, len(demos), rng)
+    feats = []
+    with torch.no_grad():
+        for d in demos:
+            x = transform_points(d["T_frame_anchor"], points)[None]  # (1, M, 3) demo frame
+            feats.append(point_features(field, feature, d["cloud"], x)[0].numpy())
+    return Template(points, np.mean(feats, axis=0).astype(np.float32), anchor, query, feature, field_id(weights),
+                    [d.get("name", "") for d in demos])
+
+
+def save_template(t: Template, path: str | Path) -> Path:
+    """Write a NIT atomically: an .npz with the arrays and a JSON header (format nift-nit/1)."""
+    header = {"format": FORMAT, "anchor": t.anchor, "query": t.query, "feature": t.feature,
+              "field": t.field_id, "demos": t.demos}
+    with atomic_path(path) as tmp:
+        with open(tmp, "wb") as fh:
+            np.savez(fh, header=np.array(json.dumps(header)), points=t.points.astype(np.float32),
+                     features=t.features.astype(np.float32))
+    return Path(path)
+
+
+def load_template(path: str | Path, weights: str | Path | None = None) -> Template:
+    """Read a NIT; refuse missing, corrupt and wrong-version files, and ones built with other
+    weights than `weights` (default: the shipped field of its feature kind)."""
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"no template at {path}")
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            header = json.loads(str(z["header"]))
+            points, features = z["points"], z["features"]
+    except (zipfile.BadZipFile, ValueError, KeyError, OSError, EOFError) as exc:
+        raise ValueError(f"{path} is not a readable NIT file ({type(exc).__name__})") from None
+    if header.get("format") != FORMAT:
+        raise ValueError(f"{path}: expected format {FORMAT!r}, found {header.get('format')!r}")
+    if points.shape[0] != features.shape[0] or points.shape[1:] != (3,):
+        raise ValueError(f"{path}: points {points.shape} and features {features.shape} do not match")
+    t = Template(points.astype(np.float64), features, header["anchor"], header["query"], header["feature"],
+                 header["field"], header["demos"])
+    current = field_id(weights or FEATURES[t.feature])
+    if current != t.field_id:
+        raise ValueError(f"{path} was built with field {t.field_id}, not with {current}; rebuild it from its demos")
+    return t

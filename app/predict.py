@@ -1,0 +1,91 @@
+"""Grasp and place poses for a target cloud, by NIFT or a baseline, in one code path (paper Table I rows).
+
+Methods: "<query>-<feature>" with query in {ibs, bps} and feature in {nif, scf, ndf} (template
+imitation, Eq. 5), "nift" = "ibs-nif", and "cpd" (demo registration). Every method answers:
+
+- T_base_tcp: the grasp pose of the gripper in the cloud's (base) frame;
+- T_base_fixture_seen: where the rack / shelf would have to be, relative to the object as it is
+  now, for the object to sit on it as in the demos;
+- motion = T_base_fixture @ inv(T_base_fixture_seen): the rigid motion that takes the object from
+  where it is to its place on the real fixture. The object's goal pose is motion @ T_base_obj
+  (when it is known, as in simulation), and with a rigid grasp the gripper's place pose is
+  motion @ T_base_tcp.
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from app.nift.cpd import best_registration
+from app.nift.imitate import ImitationConfig, imitate
+from app.recorder import DEMOS_DIR, task_demos, task_templates
+from app.se3 import invert
+from app.tasks import Task
+
+QUERY_FEATURE = [f"{q}-{f}" for q in ("bps", "ibs") for f in ("ndf", "scf", "nif")]
+METHODS = ("nift", *QUERY_FEATURE, "cpd")
+
+
+@dataclass
+class Prediction:
+    """What a method predicts for one cloud, with its costs."""
+
+    method: str
+    T_base_tcp: np.ndarray
+    T_base_fixture_seen: np.ndarray
+    motion: np.ndarray
+    losses: dict[str, list[float]] = field(default_factory=dict)
+    iterations: dict[str, int] = field(default_factory=dict)
+    seconds: dict[str, float] = field(default_factory=dict)
+
+    @property
+    def T_base_tcp_place(self) -> np.ndarray:
+        """The gripper's pose at the place, if the grasp holds the object rigidly."""
+        return self.motion @ self.T_base_tcp
+
+    def record(self) -> dict:
+        """JSON-ready."""
+        return {"method": self.method, "T_base_tcp": self.T_base_tcp.round(6).tolist(),
+                "T_base_tcp_place": self.T_base_tcp_place.round(6).tolist(),
+                "motion": self.motion.round(6).tolist(), "losses": self.losses, "iterations": self.iterations,
+                "seconds": self.seconds}
+
+
+def check_method(method: str) -> str:
+    if method not in METHODS:
+        raise ValueError(f"unknown method {method!r}; choose one of {', '.join(METHODS)}")
+    return "ibs-nif" if method == "nift" else method
+
+
+def predict(t: Task, cloud: np.ndarray, method: str = "nift", T_base_fixture: np.ndarray | None = None,
+            directory: Path | None = None, config: ImitationConfig = ImitationConfig()) -> Prediction:
+    """Grasp pose and place motion for a target cloud (N, 3) in the base frame."""
+    key = check_method(method)
+    directory = directory or DEMOS_DIR / t.name
+    if T_base_fixture is None:
+        from app.cell import CellConfig
+
+        T_base_fixture = CellConfig().fixture_pose(t.fixture)
+    if key == "cpd":
+        return _predict_cpd(method, t, cloud, T_base_fixture, directory)
+    query, feature = key.split("-")
+    templates = task_templates(t, directory, query, feature)
+    grasp = imitate(templates["grasp"], cloud, config)
+    place = imitate(templates["place"], cloud, config)
+    return Prediction(method, grasp.T, place.T, T_base_fixture @ invert(place.T),
+                      {"grasp": grasp.losses.round(5).tolist(), "place": place.losses.round(5).tolist()},
+                      {"grasp": grasp.iterations, "place": place.iterations},
+                      {"grasp": round(grasp.seconds, 3), "place": round(place.seconds, 3)})
+
+
+def _predict_cpd(method: str, t: Task, cloud: np.ndarray, T_base_fixture: np.ndarray, directory: Path) -> Prediction:
+    start = time.perf_counter()
+    demos = task_demos(directory)
+    k, reg = best_registration([d.cloud for d in demos], cloud)
+    seen = reg.transfer(demos[k].place_anchor())
+    seconds = round(time.perf_counter() - start, 3)
+    return Prediction(method, reg.transfer(demos[k].T_base_tcp), seen, T_base_fixture @ invert(seen),
+                      {"registration_sigma2": [reg.sigma2]}, {}, {"registration": seconds})

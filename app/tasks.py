@@ -1,0 +1,51 @@
+"""The cell's tasks: which category goes where, and the scripted teacher's poses for each."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import trimesh
+
+from app.objects import fixture, semantics
+from app.teacher import grasp_pose, hang_pose, shelf_pose
+
+
+@dataclass(frozen=True)
+class Task:
+    """A pick-and-place task: grasp an object of `category`, place it on `fixture`."""
+
+    name: str
+    category: str
+    fixture: str  # "rack" or "shelf"
+
+    @property
+    def upright(self) -> bool:
+        """Whether the place must leave the object upright (shelf tasks)."""
+        return self.fixture == "shelf"
+
+
+TASKS = {
+    "mug": Task("mug", "mug", "rack"),  # grasp the rim, hang the handle on the peg
+    "bowl": Task("bowl", "bowl", "shelf"),  # grasp the rim, put it upright on the shelf
+    "bottle": Task("bottle", "bottle", "shelf"),  # grasp the neck, put it upright on the shelf
+}
+
+
+def task(name: str) -> Task:
+    """A task by name, or a one-line error listing the known ones."""
+    if name not in TASKS:
+        raise ValueError(f"unknown task {name!r}; choose one of {', '.join(TASKS)}")
+    return TASKS[name]
+
+
+def teacher_grasp(mesh: trimesh.Trimesh) -> np.ndarray:
+    """T_obj_tcp of the scripted teacher for a generated (scaled) instance."""
+    return grasp_pose(mesh)
+
+
+def teacher_place(t: Task, mesh: trimesh.Trimesh, scale: float) -> np.ndarray:
+    """T_fixture_obj of the scripted teacher: the mug on the peg, bowls and bottles upright on the shelf."""
+    sem = semantics(mesh)
+    if t.fixture == "rack":
+        return hang_pose(sem, fixture("rack"), scale)
+    return shelf_pose(sem, fixture("shelf"))

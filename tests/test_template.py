@@ -1,0 +1,72 @@
+"""NIT files, multi-demo resampling, the 6-D rotation parametrisation, and imitation on known answers."""
+import json
+
+import numpy as np
+import pytest
+import torch
+
+from app.anchors import gripper_mesh
+from app.nift.imitate import ImitationConfig, imitate, rotation_from_6d, rotation_to_6d
+from app.nift.template import (FORMAT, Template, build_template, density_resample, field_id, load_template,
+                               save_template)
+from app.nift.raycast import scene_of
+from app.objects import generate
+from app.se3 import compose, make_pose, pose_error, random_rotations, rotation_angle
+from app.teacher import grasp_pose
+from app.training.views import observe
+
+
+def test_density_resampling_keeps_the_count_and_favours_where_demos_agree():
+    rng = np.random.default_rng(0)
+    agree = rng.normal(scale=0.002, size=(5, 100, 3)).reshape(-1, 3)  # 5 demos, same region
+    stray = rng.uniform(-0.1, 0.1, size=(500, 3))  # where they disagree
+    points = np.concatenate([agree, stray])
+    out = density_resample(points, 500, k=5, rng=rng)
+    assert out.shape == (500, 3) and len(np.unique(out, axis=0)) == 500  # no duplicates
+    share = np.mean(np.linalg.norm(out, axis=1) < 0.01)
+    assert share > 0.8  # the dense half of the input is > 80 % of the output
+    with pytest.raises(ValueError, match="cannot resample"):
+        density_resample(points[:10], 20, 2, rng)
+
+
+def test_6d_rotations_are_proper_and_round_trip_even_at_180_degrees():
+    R = torch.as_tensor(random_rotations(20, np.random.default_rng(1)))
+    R[0] = torch.diag(torch.tensor([-1.0, -1.0, 1.0], dtype=R.dtype))  # 180 degrees about z
+    back = rotation_from_6d(rotation_to_6d(R))
+    assert torch.allclose(back, R, atol=1e-9)
+    noisy = rotation_from_6d(torch.randn(50, 6, dtype=torch.float64))
+    eye = torch.eye(3, dtype=torch.float64).expand(50, 3, 3)
+    assert torch.allclose(noisy.transpose(1, 2) @ noisy, eye, atol=1e-9)
+    assert torch.allclose(torch.linalg.det(noisy), torch.ones(50, dtype=torch.float64), atol=1e-9)
+
+
+def fake_template(feature_dim=4, anchor="gripper"):
+    rng = np.random.default_rng(0)
+    return Template(rng.normal(size=(30, 3)), rng.normal(size=(30, feature_dim)).astype(np.float32), anchor,
+                    "ibs", "nif", field_id("nif"), ["demo-0"])
+
+
+def test_template_files_round_trip_and_bad_files_are_refused(tmp_path):
+    t = fake_template()
+    path = save_template(t, tmp_path / "t.nit.npz")
+    back = load_template(path)
+    assert np.allclose(back.points, t.points, atol=1e-6) and np.array_equal(back.features, t.features)
+    assert (back.anchor, back.query, back.feature, back.demos) == ("gripper", "ibs", "nif", ["demo-0"])
+    with pytest.raises(FileNotFoundError, match="no template"):
+        load_template(tmp_path / "missing.npz")
+    (tmp_path / "garbage.npz").write_bytes(b"\x00" * 100)
+    with pytest.raises(ValueError, match="not a readable NIT file"):
+        load_template(tmp_path / "garbage.npz")
+    (tmp_path / "short.npz").write_bytes(path.read_bytes()[:300])
+    with pytest.raises(ValueError, match="not a readable NIT file"):
+        load_template(tmp_path / "short.npz")
+    with np.load(path) as z:
+        header = json.loads(str(z["header"]))
+        arrays = {k: z[k] for k in ("points", "features")}
+    for change, message in (({"format": "nift-nit/0"}, "expected format"),
+                            ({"field": "nif:000000000000"}, "was built with field")):
+        bad = tmp_path / "bad.npz"
+        np.savez(bad, header=np.array(json.dumps({**header, **change})), **arrays)
+        with pytest.raises(ValueError, match=message):
+            load_template(bad)
+    assert FORMAT == "nift-nit/1"
