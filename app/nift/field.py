@@ -48,7 +48,10 @@ class FieldConfig:
     encoder_blocks: int = 4
     decoder_width: int = 64
     decoder_blocks: int = 4
-    neighbours: int = 0  # k of a kNN edge feature at the encoder input (0: the point alone)
+    # k of the kNN local feature at the encoder input (see local_features). Needed: with the point
+    # alone (k = 0) every per-point feature is a multiple of x_i, the mean pool of a centred cloud
+    # is zero, and the encoder collapses (measured: it could not even overfit 8 samples).
+    neighbours: int = 16
     shared_nonlinearity: bool = True  # one VN ReLU direction per point in the encoder blocks
     input_scale: float = 10.0  # metres -> network units
 
@@ -73,14 +76,17 @@ class Latent:
     center: torch.Tensor
 
 
-def edge_features(p: torch.Tensor, k: int) -> torch.Tensor:
-    """Equivariant local features of points p (B, N, 3): (B, N, k, 3, 3) = [x_j - x_i, x_i, x_i x x_j]."""
+def local_features(p: torch.Tensor, k: int) -> torch.Tensor:
+    """Equivariant per-point features of p (B, N, 3): (B, N, 3, 3) = [c_i - x_i, x_i, x_i x c_i],
+    c_i the centroid of x_i's k nearest neighbours - the edge feature [x_j - x_i, x_i, x_i x x_j]
+    of Deng et al. / NDF averaged over the neighbours before the first layer (it is linear in x_j),
+    which keeps the first layer O(N) instead of O(N k): 4x faster training, measured."""
     with torch.no_grad():
         idx = torch.cdist(p, p).topk(k, dim=-1, largest=False).indices  # (B, N, k), self included
     nbr = torch.gather(p.unsqueeze(1).expand(-1, p.shape[1], -1, -1), 2,
                        idx.unsqueeze(-1).expand(-1, -1, -1, 3))  # (B, N, k, 3)
-    x_i = p.unsqueeze(2).expand_as(nbr)
-    return torch.stack([nbr - x_i, x_i, torch.cross(x_i, nbr, dim=-1)], dim=-1)  # (B, N, k, 3, 3)
+    c = nbr.mean(dim=2)  # (B, N, 3)
+    return torch.stack([c - p, p, torch.cross(p, c, dim=-1)], dim=-1)  # (B, N, 3, 3)
 
 
 class Encoder(nn.Module):
@@ -91,7 +97,7 @@ class Encoder(nn.Module):
         h = cfg.encoder_width
         self.k = cfg.neighbours
         self.fc_pos = VNLinear(3 if self.k else 1, h)
-        self.act_pos = VNLeakyReLU(h)
+        self.act_pos = VNLeakyReLU(h, shared=cfg.shared_nonlinearity)
         self.fc_in = VNLinear(h, 2 * h)
         self.blocks = nn.ModuleList([VNResnetBlock(2 * h, h, cfg.shared_nonlinearity) for _ in range(cfg.encoder_blocks)])
         self.act_out = VNLeakyReLU(h)
@@ -99,7 +105,7 @@ class Encoder(nn.Module):
 
     def forward(self, p: torch.Tensor) -> torch.Tensor:
         if self.k:
-            x = self.act_pos(self.fc_pos(edge_features(p, self.k))).mean(dim=2)  # (B, N, 3, H)
+            x = self.act_pos(self.fc_pos(local_features(p, self.k)))  # (B, N, 3, H)
         else:
             x = self.act_pos(self.fc_pos(p.unsqueeze(-1)))  # (B, N, 3, H)
         x = self.fc_in(x)  # (B, N, 3, 2H)
