@@ -6,11 +6,11 @@ import signal
 import sys
 
 from app import __version__
-from app.commands import (bench_cell, bench_field, bench_geometry, calibrate, capture, imitate, make_data, objects,
-                          sim, teach, train)
+from app.commands import (bench_cell, bench_field, bench_geometry, bench_imitation, calibrate, capture, imitate,
+                          make_data, objects, sim, teach, train)
 
 COMMANDS = [objects, sim, calibrate, capture, make_data, train, teach, imitate, bench_geometry, bench_cell,
-            bench_field]
+            bench_field, bench_imitation]
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -5,15 +5,10 @@ import numpy as np
 import pytest
 import torch
 
-from app.anchors import gripper_mesh
-from app.nift.imitate import ImitationConfig, imitate, rotation_from_6d, rotation_to_6d
-from app.nift.template import (FORMAT, Template, build_template, density_resample, field_id, load_template,
+from app.nift.imitate import rotation_from_6d, rotation_to_6d
+from app.nift.template import (FORMAT, Template, density_resample, field_id, load_template,
                                save_template)
-from app.nift.raycast import scene_of
-from app.objects import generate
-from app.se3 import compose, make_pose, pose_error, random_rotations, rotation_angle
-from app.teacher import grasp_pose
-from app.training.views import observe
+from app.se3 import random_rotations
 
 
 def test_density_resampling_keeps_the_count_and_favours_where_demos_agree():

@@ -36,7 +36,8 @@ def config_from(args: argparse.Namespace):
     from app.training.train import TrainConfig
 
     field = FieldConfig(target=args.target, scf_order=args.scf_order)
-    values = dict(epochs=args.epochs or (1 if args.quick else 10), lr=args.lr, batch_size=args.batch_size, minutes=args.minutes, seed=args.seed)
+    values = dict(epochs=args.epochs or (1 if args.quick else 10), lr=args.lr, batch_size=args.batch_size,
+                  minutes=args.minutes, seed=args.seed)
     if args.quick:
         field = FieldConfig(target=args.target, scf_order=args.scf_order, latent=8, encoder_width=8,
                             encoder_blocks=1, decoder_width=16, decoder_blocks=1)

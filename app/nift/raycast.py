@@ -30,9 +30,12 @@ def cast(scene: o3d.t.geometry.RaycastingScene, rays: np.ndarray) -> np.ndarray:
 
 
 def signed_distance(scene: o3d.t.geometry.RaycastingScene, points: np.ndarray) -> np.ndarray:
-    """Signed distance of points (N, 3) to a closed mesh (negative inside): (N,) float32."""
+    """Signed distance of points (N, 3) to a closed mesh (negative inside): (N,) float32.
+
+    Inside/outside is a majority vote of 3 rays: one ray that grazes an edge of a mesh with few,
+    large triangles (the gripper's boxes) miscounts its crossings - measured, one point in 2,000."""
     q = o3d.core.Tensor(np.ascontiguousarray(points, dtype=np.float32))
-    return scene.compute_signed_distance(q).numpy()
+    return scene.compute_signed_distance(q, nsamples=3).numpy()
 
 
 def unsigned_distance(scene: o3d.t.geometry.RaycastingScene, points: np.ndarray) -> np.ndarray:

@@ -1,0 +1,99 @@
+"""`nift bench-imitation`: seconds per prediction and pose error against the scripted teacher.
+
+Targets are unseen test-split objects, upright at a random yaw and place in the workspace, with
+uniform random scale, seen by the cell's Kinect (ray cast with its noise model, resampled to
+1,024 points like perception - no PyBullet, so the benchmark measures the method alone).
+
+Errors respect each task's symmetries: bowls and bottles are bodies of revolution, so the
+teacher's grasp is first turned about the object's axis to the predicted grasp's azimuth, and
+the two-finger gripper is symmetric under a half turn about its approach axis. On the shelf any
+yaw and any spot on the board is as good as another, so the place error there is the object's
+height error and its tilt; on the rack it is the full pose error.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from app.cell import WORKSPACE, CellConfig
+from app.nift.imitate import ImitationConfig
+from app.nift.raycast import scene_of
+from app.objects import split
+from app.perception import resample
+from app.predict import predict
+from app.se3 import invert, make_pose, pose_error, rotvec_to_matrix
+from app.spawn import SCALE_RANGE
+from app.tasks import task, teacher_grasp, teacher_place
+from app.training.views import kinect_cloud
+from hardware.sim.kinect import look_at
+
+HALF_TURN = make_pose(rotvec_to_matrix([0.0, 0.0, np.pi]))
+
+
+def target(category: str, seed: int, rng: np.random.Generator, cell: CellConfig = CellConfig()):
+    """(mesh scaled, T_base_obj, cloud (1024, 3) base frame) of an upright test object."""
+    from app.objects import generate
+
+    mesh = generate(category, seed)
+    scale = rng.uniform(*SCALE_RANGE)
+    mesh.apply_scale(scale)
+    (x0, x1), (y0, y1) = WORKSPACE
+    T_base_obj = make_pose(rotvec_to_matrix([0, 0, rng.uniform(-np.pi, np.pi)]), [rng.uniform(x0, x1), rng.uniform(y0, y1), 0])
+    posed = mesh.copy().apply_transform(T_base_obj)
+    center = posed.bounds.mean(axis=0)
+    radius = float(np.linalg.norm(posed.vertices - center, axis=1).max())
+    T_base_cam = look_at(cell.camera_eye, cell.camera_target)
+    cloud = kinect_cloud(scene_of(posed), T_base_cam, rng, sphere=(center, radius))
+    return mesh, T_base_obj, resample(cloud, 1024, int(rng.integers(2**31))), scale
+
+
+def grasp_error(category: str, T_base_obj: np.ndarray, T_pred: np.ndarray, T_teacher: np.ndarray) -> tuple[float, float]:
+    """(metres, degrees) between predicted and teacher grasp, modulo the task's symmetries."""
+    T_obj_pred, T_obj_teacher = invert(T_base_obj) @ T_pred, invert(T_base_obj) @ T_teacher
+    if category in ("bowl", "bottle"):
+        turn = np.arctan2(T_obj_pred[1, 3], T_obj_pred[0, 3]) - np.arctan2(T_obj_teacher[1, 3], T_obj_teacher[0, 3])
+        T_obj_teacher = make_pose(rotvec_to_matrix([0, 0, turn])) @ T_obj_teacher
+    errs = [pose_error(T_obj_pred, T_obj_teacher @ flip) for flip in (np.eye(4), HALF_TURN)]
+    dist, angle = min(errs, key=lambda e: e[1])
+    return dist, float(np.degrees(angle))
+
+
+def place_error(fixture: str, goal_pred: np.ndarray, goal_teacher: np.ndarray) -> tuple[float, float]:
+    """(metres, degrees): full pose error on the rack; height error and tilt on the shelf."""
+    if fixture == "rack":
+        dist, angle = pose_error(goal_pred, goal_teacher)
+        return dist, float(np.degrees(angle))
+    tilt = np.degrees(np.arccos(np.clip(goal_pred[2, 2], -1.0, 1.0)))
+    return abs(goal_pred[2, 3] - goal_teacher[2, 3]), float(tilt)
+
+
+def run_imitation_benchmark(quick: bool = False, seed: int = 0, method: str = "nift", objects: int = 20,
+                            tasks: tuple[str, ...] = ("mug", "bowl", "bottle")) -> dict:
+    """Per task: median seconds per prediction, iterations, and median grasp / place errors."""
+    cell = CellConfig()
+    config = ImitationConfig(seed=seed)
+    n = 2 if quick else objects
+    figures: dict = {"method": method, "objects_per_task": n}
+    for name in tasks:
+        t = task(name)
+        rng = np.random.default_rng([seed, len(name)])
+        seeds = rng.choice(split(t.category, "test"), size=n, replace=False)
+        rows = []
+        for s in seeds:
+            mesh, T_base_obj, cloud, scale = target(t.category, int(s), rng, cell)
+            pred = predict(t, cloud, method, cell.fixture_pose(t.fixture), config=config)
+            g = grasp_error(t.category, T_base_obj, pred.T_base_tcp, T_base_obj @ teacher_grasp(mesh))
+            goal = cell.fixture_pose(t.fixture) @ teacher_place(t, mesh, scale)
+            p = place_error(t.fixture, pred.motion @ T_base_obj, goal)
+            rows.append((sum(pred.seconds.values()), *g, *p, *pred.iterations.values()))
+        a = np.array(rows, dtype=float)
+        med = np.median(a, axis=0)
+        figures.update({
+            f"{name}_seconds_per_prediction": round(float(med[0]), 2),
+            f"{name}_grasp_error_mm": round(1000 * float(med[1]), 1),
+            f"{name}_grasp_error_deg": round(float(med[2]), 1),
+            f"{name}_place_error_mm": round(1000 * float(med[3]), 1),
+            f"{name}_place_error_deg": round(float(med[4]), 1),
+        })
+        if a.shape[1] > 5:
+            figures[f"{name}_iterations"] = [int(v) for v in med[5:]]
+    return figures

@@ -1,0 +1,63 @@
+"""Imitation (Eq. 5) with the shipped NIF on known answers: a demo's own cloud, and rigidly moved clouds."""
+import numpy as np
+import pytest
+
+from app.anchors import anchor_mesh
+from app.nift.imitate import ImitationConfig, imitate
+from app.nift.raycast import scene_of
+from app.nift.template import build_template
+from app.objects import generate, rack
+from app.se3 import invert, make_pose, random_rotations, rotvec_to_matrix
+from app.teacher import grasp_pose, hang_pose
+from app.training.views import observe
+
+
+def demo_scene(seed=3):
+    """A mug (train split) upright at a known pose, its single-view cloud, and the teacher's poses."""
+    mesh = generate("mug", seed)
+    center = mesh.bounds.mean(axis=0)
+    radius = float(np.linalg.norm(mesh.vertices - center, axis=1).max())
+    rng = np.random.default_rng(seed)
+    cloud_obj = observe(scene_of(mesh), "single", np.eye(3), center, radius, 1024, rng)
+    T_base_obj = make_pose(rotvec_to_matrix([0, 0, 0.4]), [0.5, 0.05, 0.0])
+    cloud = cloud_obj @ T_base_obj[:3, :3].T + T_base_obj[:3, 3]
+    T_base_tcp = T_base_obj @ grasp_pose(mesh)
+    T_base_rack_seen = T_base_obj @ invert(hang_pose(mesh.metadata["semantics"], rack()))
+    return cloud, T_base_tcp, T_base_rack_seen
+
+
+def errors(T_a, T_b):
+    d = invert(T_a) @ T_b
+    return float(np.linalg.norm(T_a[:3, 3] - T_b[:3, 3])), float(np.degrees(np.arccos(np.clip((np.trace(d[:3, :3]) - 1) / 2, -1, 1))))
+
+
+@pytest.fixture(scope="module")
+def demo():
+    cloud, T_base_tcp, T_base_rack_seen = demo_scene()
+    grasp = build_template("gripper", anchor_mesh("gripper"), [{"cloud": cloud, "T_frame_anchor": T_base_tcp}])
+    place = build_template("rack", anchor_mesh("rack"), [{"cloud": cloud, "T_frame_anchor": T_base_rack_seen}])
+    return cloud, {"grasp": (grasp, T_base_tcp), "place": (place, T_base_rack_seen)}
+
+
+@pytest.mark.parametrize("stage", ["grasp", "place"])
+def test_imitating_a_demo_on_its_own_cloud_returns_its_pose(demo, stage):
+    cloud, stages = demo
+    template, truth = stages[stage]
+    result = imitate(template, cloud, ImitationConfig(seed=1))
+    dist, angle = errors(result.T, truth)
+    assert dist <= 0.005 and angle <= 5.0, (stage, dist, angle, result.losses)
+    assert result.losses[result.best] == result.losses.min()
+
+
+@pytest.mark.slow
+def test_moving_the_cloud_moves_the_grasp_the_same_way(demo):
+    cloud, stages = demo
+    template, truth = stages["grasp"]
+    rng = np.random.default_rng(5)
+    good = 0
+    for R in random_rotations(10, rng):
+        M = make_pose(R, rng.uniform(-0.1, 0.1, 3))
+        moved = cloud @ M[:3, :3].T + M[:3, 3]
+        dist, angle = errors(imitate(template, moved, ImitationConfig(seed=2)).T, M @ truth)
+        good += dist <= 0.01 and angle <= 10.0
+    assert good >= 9

@@ -1,0 +1,44 @@
+"""Teach-in end to end in the sim cell, and imitation from the command line."""
+import json
+
+import numpy as np
+import pytest
+
+from app.cli import main
+from app.demo import load_demo
+from app.nift.template import load_template
+
+
+@pytest.mark.slow
+def test_teach_records_verified_demos_and_imitate_uses_them(tmp_path, capsys):
+    out, calibration = tmp_path / "bottle", tmp_path / "calibration.json"
+    assert main(["teach", "--task", "bottle", "--demos", "1", "--out", str(out), "--calibration", str(calibration),
+                 "--json"]) == 0
+    report = json.loads(capsys.readouterr().out)
+    assert report["demos"] == 1 and calibration.is_file()
+    demo = load_demo(out / "demo-00.npz")
+    assert demo.verdicts["grasp"].startswith("held") and demo.verdicts["place"] == "resting on the fixture"
+    # the cloud is the object: its centroid lies within the object's size of the object's origin
+    assert np.linalg.norm(demo.cloud.mean(axis=0)[:2] - demo.T_base_obj[:2, 3]) < 0.05
+    assert load_template(out / "grasp-ibs-nif.nit.npz").anchor == "gripper"
+    assert load_template(out / "place-ibs-nif.nit.npz").anchor == "shelf"
+
+    cloud = tmp_path / "target.ply"
+    assert main(["capture", "--category", "bottle", "--out", str(cloud), "--image", str(tmp_path / "rgb.png"),
+                 "--calibration", str(calibration), "--json"]) == 0
+    capsys.readouterr()
+    for method in ("nift", "cpd"):
+        assert main(["imitate", "--task", "bottle", "--cloud", str(cloud), "--demos", str(out), "--method", method,
+                     "--iterations", "60", "--json"]) == 0
+        pred = json.loads(capsys.readouterr().out)
+        T = np.array(pred["T_base_tcp"])
+        assert np.allclose(T[:3, :3] @ T[:3, :3].T, np.eye(3), atol=1e-6)
+        assert pred["method"] == method
+
+
+def test_imitate_refuses_bad_input(tmp_path, capsys):
+    assert main(["imitate", "--task", "mug", "--cloud", str(tmp_path / "none.ply")]) == 2
+    assert "no point cloud" in capsys.readouterr().err
+    np.save(tmp_path / "c.npy", np.zeros((100, 3)))
+    assert main(["imitate", "--task", "mug", "--cloud", str(tmp_path / "c.npy"), "--demos", str(tmp_path)]) == 2
+    assert "no demos in" in capsys.readouterr().err
