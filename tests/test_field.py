@@ -52,7 +52,7 @@ def test_a_few_steps_lower_the_loss_and_reload_gives_identical_outputs(test_spli
     field = NeuralField(SMALL)
     batch = test_split_data.batch(np.arange(4), 128, 128, SMALL.scf_order, np.random.default_rng(0))
     opt = torch.optim.Adam(field.parameters(), lr=3e-3)
-    first = float(loss_of(field, batch))
+    first = loss_of(field, batch).item()
     for _ in range(40):
         loss = loss_of(field, batch)
         opt.zero_grad()
@@ -95,10 +95,11 @@ def test_shipped_weights_carry_model_cards():
         assert field_path(name).stat().st_size < 10e6
 
 
-# Thresholds set from the shipped fields' own test-split figures (model cards), with margin for
-# this small sample: NIF test R^2 0.__ -> require 0.__; NDF test accuracy 0.__ -> require 0.__.
-NIF_R2_MIN = 0.5
-NDF_ACC_MIN = 0.85
+# Thresholds set from the shipped fields' own test-split figures (model cards, 600 samples of 300 unseen
+# instances): NIF R^2 0.40 -> require 0.25 on this 24-sample draw; NDF accuracy 0.870 -> require
+# 0.855 and 1 point above what guessing "all empty" scores on the same draw (about 0.85).
+NIF_R2_MIN = 0.25
+NDF_ACC_MIN = 0.855
 
 
 def test_shipped_nif_predicts_scf_on_unseen_objects(test_split_data):
@@ -109,3 +110,4 @@ def test_shipped_nif_predicts_scf_on_unseen_objects(test_split_data):
 def test_shipped_ndf_predicts_occupancy_on_unseen_objects(test_split_data):
     metrics = evaluate(load_field("ndf"), test_split_data, np.arange(test_split_data.n_samples), 1024, 500)
     assert metrics["occ_accuracy"] > NDF_ACC_MIN, metrics
+    assert metrics["occ_accuracy"] > 1.0 - metrics["occupied_share"] + 0.01, metrics  # beats "all empty"

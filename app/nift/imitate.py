@@ -13,7 +13,10 @@ c_O, a Haar-random rotation and a small random translation u,
 
 then Adam (lr 1e-2) on (R, t) for up to `iterations` steps, stopping early once no
 initialisation has improved its loss by `tolerance` (relative) for `patience` steps. The lowest
-final loss wins. Rotation parametrisation: the continuous 6-D representation of Zhou et al.
+final loss wins. Our addition: the step size decays (cosine) to 5 % of lr by the last
+iteration - with a constant 1e-2 the pose keeps jittering by millimetres around the optimum
+(measured on a demo's own cloud: 9 mm / 9 degrees constant, 0.1 mm / 0.1 degrees decayed).
+Optional (`prune_every`): drop the worse half of the initialisations every so many steps. Rotation parametrisation: the continuous 6-D representation of Zhou et al.
 (CVPR 2019) - two columns, Gram-Schmidt - which has no singularity anywhere, 180 degrees included
 (axis-angle and quaternions wrap or double-cover there).
 """
@@ -40,6 +43,9 @@ class ImitationConfig:
     init_translation: float = 0.05  # metres, half-width of the uniform initial offset
     patience: int = 50
     tolerance: float = 1e-3
+    lr_final_ratio: float = 0.05  # cosine decay of the step size to this share (1.0 = constant)
+    prune_every: int = 0  # > 0: every so many steps drop the worse half of the inits (0 = off, the paper's)
+    keep: int = 2  # pruning keeps at least this many
     seed: int = 0
 
 
@@ -68,6 +74,24 @@ def rotation_to_6d(R: torch.Tensor) -> torch.Tensor:
     return torch.cat([R[:, :, 0], R[:, :, 1]], dim=-1)
 
 
+def lr_at(config: ImitationConfig, iteration: int) -> float:
+    """Cosine decay from lr to lr * lr_final_ratio over the iteration budget."""
+    lo = config.lr * config.lr_final_ratio
+    return lo + 0.5 * (config.lr - lo) * (1 + np.cos(np.pi * min(iteration / config.iterations, 1.0)))
+
+
+def _subset(opt: torch.optim.Adam, params: list[torch.Tensor], keep: torch.Tensor):
+    """New leaf parameters holding rows `keep`, and an Adam that carries their moment estimates."""
+    new = [p.detach()[keep].clone().requires_grad_(True) for p in params]
+    new_opt = torch.optim.Adam(new, lr=opt.param_groups[0]["lr"])
+    for old_p, new_p in zip(params, new):
+        state = opt.state.get(old_p)
+        if state:
+            new_opt.state[new_p] = {"step": state["step"].clone(), "exp_avg": state["exp_avg"][keep].clone(),
+                                    "exp_avg_sq": state["exp_avg_sq"][keep].clone()}
+    return new, new_opt
+
+
 def imitate(template: Template, cloud: np.ndarray, config: ImitationConfig = ImitationConfig(),
             field: NeuralField | None = None) -> Imitation:
     """Optimise Eq. 5 for a target cloud (N, 3); `field` defaults to the template's shipped field."""
@@ -89,29 +113,40 @@ def imitate(template: Template, cloud: np.ndarray, config: ImitationConfig = Imi
         latent = field.encode(cloud)
     feature = template.feature
 
-    def losses() -> torch.Tensor:
+    def losses(r6: torch.Tensor, t: torch.Tensor) -> torch.Tensor:
         R = rotation_from_6d(r6)  # (I, 3, 3)
         x = torch.einsum("iab,mb->ima", R, X - c_X) + c_O + t[:, None]  # (I, M, 3)
         f = field.predict(latent, x) if feature == "scf" else field.features(latent, x)  # (I, M, F)
         return (f - target).abs().sum(dim=-1).mean(dim=-1)  # (I,)
 
+    alive = torch.arange(config.inits)  # original index of each row still optimised
+    final_r6, final_t = r6.detach().clone(), t.detach().clone()
+    final = torch.full((config.inits,), float("inf"))
     best = torch.full((config.inits,), float("inf"))
     stale, iterations = 0, 0
     for iterations in range(1, config.iterations + 1):
-        loss = losses()
+        for group in opt.param_groups:  # cosine decay to lr_final: fine steps at the end
+            group["lr"] = lr_at(config, iterations)
+        loss = losses(r6, t)
         opt.zero_grad()
         loss.sum().backward()
         opt.step()
         current = loss.detach()
-        improved = current < best * (1 - config.tolerance)
-        best = torch.minimum(best, current)
+        improved = current < best[alive] * (1 - config.tolerance)
+        best[alive] = torch.minimum(best[alive], current)
         stale = 0 if improved.any() else stale + 1
         if stale >= config.patience:
             break
+        if config.prune_every and iterations % config.prune_every == 0 and len(alive) > config.keep:
+            keep = torch.argsort(current)[:max(config.keep, len(alive) // 2)]
+            final_r6[alive], final_t[alive], final[alive] = r6.detach(), t.detach(), current  # dropped keep these
+            alive = alive[keep]
+            (r6, t), opt = _subset(opt, [r6, t], keep)
     with torch.no_grad():
-        final = losses()
-        R = rotation_from_6d(r6)
-        trans = c_O + t - torch.einsum("iab,b->ia", R, c_X)
+        final[alive] = losses(r6, t)
+        final_r6[alive], final_t[alive] = r6, t
+        R = rotation_from_6d(final_r6)
+        trans = c_O + final_t - torch.einsum("iab,b->ia", R, c_X)
     poses = np.stack([make_pose(R[i].double().numpy(), trans[i].double().numpy()) for i in range(config.inits)])
     k = int(torch.argmin(final))
     return Imitation(poses[k], poses, final.numpy().astype(np.float64), k, iterations, time.perf_counter() - start)
