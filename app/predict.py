@@ -20,13 +20,12 @@ from pathlib import Path
 import numpy as np
 
 from app.nift.cpd import best_registration
+from app.methods import check_method
 from app.nift.imitate import ImitationConfig, imitate
 from app.recorder import DEMOS_DIR, task_demos, task_templates
 from app.se3 import invert
 from app.tasks import Task
 
-QUERY_FEATURE = [f"{q}-{f}" for q in ("bps", "ibs") for f in ("ndf", "scf", "nif")]
-METHODS = ("nift", *QUERY_FEATURE, "cpd")
 
 
 @dataclass
@@ -52,12 +51,6 @@ class Prediction:
                 "T_base_tcp_place": self.T_base_tcp_place.round(6).tolist(),
                 "motion": self.motion.round(6).tolist(), "losses": self.losses, "iterations": self.iterations,
                 "seconds": self.seconds}
-
-
-def check_method(method: str) -> str:
-    if method not in METHODS:
-        raise ValueError(f"unknown method {method!r}; choose one of {', '.join(METHODS)}")
-    return "ibs-nif" if method == "nift" else method
 
 
 def predict(t: Task, cloud: np.ndarray, method: str = "nift", T_base_fixture: np.ndarray | None = None,

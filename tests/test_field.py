@@ -58,7 +58,7 @@ def test_a_few_steps_lower_the_loss_and_reload_gives_identical_outputs(test_spli
         opt.zero_grad()
         loss.backward()
         opt.step()
-    assert float(loss_of(field, batch)) < 0.8 * first
+    assert loss_of(field, batch).item() < 0.8 * first
     path = save_field(field, tmp_path / "f.pt", card={"note": "test"})
     again = load_field(path)
     with torch.no_grad():

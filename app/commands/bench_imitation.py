@@ -10,7 +10,7 @@ HELP = "measure imitation time per prediction and grasp/place errors on unseen t
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    from app.predict import METHODS
+    from app.methods import METHODS
 
     p.add_argument("--method", default="nift", choices=METHODS, help="method to measure (default nift)")
     p.add_argument("--objects", type=int, default=20, help="test objects per task (default 20)")

@@ -10,7 +10,7 @@ HELP = "predict the grasp pose and the place motion for an object cloud from a t
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    from app.predict import METHODS
+    from app.methods import METHODS
 
     p.add_argument("--task", required=True, choices=["mug", "bowl", "bottle"], help="which task's demos to imitate")
     p.add_argument("--cloud", type=Path, required=True, help="object cloud in the base frame (.ply .pcd .xyz .npy)")

@@ -1,0 +1,12 @@
+"""The names of the prediction methods (paper Table I rows); no heavy imports, the CLI reads it at start."""
+from __future__ import annotations
+
+QUERY_FEATURE = tuple(f"{q}-{f}" for q in ("bps", "ibs") for f in ("ndf", "scf", "nif"))
+METHODS = ("nift", *QUERY_FEATURE, "cpd")  # nift = ibs-nif
+
+
+def check_method(method: str) -> str:
+    """The canonical name of a method ('nift' -> 'ibs-nif'), or a one-line error."""
+    if method not in METHODS:
+        raise ValueError(f"unknown method {method!r}; choose one of {', '.join(METHODS)}")
+    return "ibs-nif" if method == "nift" else method
