@@ -7,14 +7,12 @@ shelf) and the fixture's pose in the base frame.
 """
 from __future__ import annotations
 
-import json
-import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from app.io_utils import atomic_path
+from app.io_utils import read_npz, write_npz
 from app.se3 import invert
 
 FORMAT = "nift-demo/1"
@@ -53,26 +51,15 @@ def save_demo(demo: Demo, path: str | Path) -> Path:
     header = {"format": FORMAT, "task": demo.task, "category": demo.category, "seed": demo.seed,
               "scale": demo.scale, "name": demo.name, "intrinsics": demo.intrinsics, "verdicts": demo.verdicts,
               **{k: np.asarray(getattr(demo, k)).tolist() for k in POSES}}
-    with atomic_path(path) as tmp:
-        with open(tmp, "wb") as fh:
-            np.savez(fh, header=np.array(json.dumps(header)), cloud=np.asarray(demo.cloud, dtype=np.float32))
-    return Path(path)
+    return write_npz(path, {"cloud": np.asarray(demo.cloud, dtype=np.float32)}, header)
 
 
 def load_demo(path: str | Path) -> Demo:
     """Read a demo; missing, corrupt, foreign and wrong-version files get a one-line error."""
-    path = Path(path)
-    if not path.is_file():
+    if not Path(path).is_file():
         raise FileNotFoundError(f"no demo at {path}")
-    try:
-        with np.load(path, allow_pickle=False) as z:
-            header = json.loads(str(z["header"]))
-            cloud = z["cloud"].astype(np.float64)
-    except (zipfile.BadZipFile, ValueError, KeyError, OSError, EOFError) as exc:
-        raise ValueError(f"{path} is not a readable demo file ({type(exc).__name__})") from None
-    if not isinstance(header, dict) or header.get("format") != FORMAT:
-        found = header.get("format") if isinstance(header, dict) else None
-        raise ValueError(f"{path}: expected format {FORMAT!r}, found {found!r}")
+    header, arrays = read_npz(path, FORMAT, "demo", ("cloud",))
+    cloud = arrays["cloud"].astype(np.float64)
     try:
         poses = {k: np.array(header[k], dtype=np.float64).reshape(4, 4) for k in POSES}
         return Demo(header["task"], cloud, category=header["category"], seed=int(header["seed"]),

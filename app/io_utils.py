@@ -31,3 +31,34 @@ def write_json(path: str | Path, data: dict) -> Path:
     with atomic_path(path) as tmp:
         tmp.write_text(json.dumps(data, indent=2) + "\n")
     return Path(path)
+
+
+def write_npz(path: str | Path, arrays: dict, header: dict | None = None) -> Path:
+    """Write arrays (and a JSON header, stored as the string array `header`) as one .npz, atomically."""
+    import numpy as np
+
+    if header is not None:
+        arrays = {"header": np.array(json.dumps(header)), **arrays}
+    with atomic_path(path) as tmp:
+        with open(tmp, "wb") as fh:
+            np.savez(fh, **arrays)
+    return Path(path)
+
+
+def read_npz(path: str | Path, fmt: str, kind: str, names: tuple[str, ...]) -> tuple[dict, dict]:
+    """(header, arrays) of an existing file written by write_npz; a corrupt, foreign or wrong-format
+    file gets a one-line error naming `kind` (e.g. "demo") and the file."""
+    import zipfile
+
+    import numpy as np
+
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            header = json.loads(str(z["header"]))
+            arrays = {name: z[name] for name in names}
+    except (zipfile.BadZipFile, ValueError, KeyError, OSError, EOFError) as exc:
+        raise ValueError(f"{path} is not a readable {kind} file ({type(exc).__name__})") from None
+    found = header.get("format") if isinstance(header, dict) else None
+    if found != fmt:
+        raise ValueError(f"{path}: expected format {fmt!r}, found {found!r}")
+    return header, arrays

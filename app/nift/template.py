@@ -19,8 +19,6 @@ predicted SCF c_0..c_n).
 from __future__ import annotations
 
 import hashlib
-import json
-import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -28,7 +26,7 @@ import numpy as np
 import torch
 from scipy.spatial import cKDTree
 
-from app.io_utils import atomic_path
+from app.io_utils import read_npz, write_npz
 from app.nift.field import NeuralField, field_path, load_field
 from app.nift.ibs import compute_ibs
 from app.nift.raycast import scene_of, signed_distance
@@ -127,11 +125,8 @@ def save_template(t: Template, path: str | Path) -> Path:
     """Write a NIT atomically: an .npz with the arrays and a JSON header (format nift-nit/1)."""
     header = {"format": FORMAT, "anchor": t.anchor, "query": t.query, "feature": t.feature,
               "field": t.field_id, "demos": t.demos}
-    with atomic_path(path) as tmp:
-        with open(tmp, "wb") as fh:
-            np.savez(fh, header=np.array(json.dumps(header)), points=t.points.astype(np.float32),
-                     features=t.features.astype(np.float32))
-    return Path(path)
+    return write_npz(path, {"points": t.points.astype(np.float32), "features": t.features.astype(np.float32)},
+                     header)
 
 
 def load_template(path: str | Path, weights: str | Path | None = None) -> Template:
@@ -140,14 +135,8 @@ def load_template(path: str | Path, weights: str | Path | None = None) -> Templa
     path = Path(path)
     if not path.is_file():
         raise FileNotFoundError(f"no template at {path}")
-    try:
-        with np.load(path, allow_pickle=False) as z:
-            header = json.loads(str(z["header"]))
-            points, features = z["points"], z["features"]
-    except (zipfile.BadZipFile, ValueError, KeyError, OSError, EOFError) as exc:
-        raise ValueError(f"{path} is not a readable NIT file ({type(exc).__name__})") from None
-    if header.get("format") != FORMAT:
-        raise ValueError(f"{path}: expected format {FORMAT!r}, found {header.get('format')!r}")
+    header, arrays = read_npz(path, FORMAT, "NIT", ("points", "features"))
+    points, features = arrays["points"], arrays["features"]
     if points.shape[0] != features.shape[0] or points.shape[1:] != (3,):
         raise ValueError(f"{path}: points {points.shape} and features {features.shape} do not match")
     t = Template(points.astype(np.float64), features, header["anchor"], header["query"], header["feature"],

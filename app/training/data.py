@@ -22,7 +22,7 @@ from __future__ import annotations
 import json
 import time
 from concurrent.futures import ProcessPoolExecutor
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass
 from multiprocessing import get_context
 from pathlib import Path
 from typing import Iterator
@@ -30,7 +30,7 @@ from typing import Iterator
 import numpy as np
 from tqdm import tqdm
 
-from app.io_utils import atomic_path, write_json
+from app.io_utils import write_json, write_npz
 from app.nift.raycast import scene_of
 from app.nift.scf import compute_scf
 from app.objects import IN_DOMAIN, check_category, generate, split
@@ -136,10 +136,7 @@ def make_shard(cfg: DataConfig, index: int, instances: list[tuple[str, int]], ou
         "scale": np.concatenate([p["scale"] for p in parts]),  # (S,)
         "cloud": np.concatenate([p["cloud"] for p in parts]),  # (S, N, 3)
     }
-    path = out / shard_name(index)
-    with atomic_path(path) as tmp:
-        with open(tmp, "wb") as fh:
-            np.savez(fh, **arrays)
+    path = write_npz(out / shard_name(index), arrays)
     return {"file": path.name, "instances": len(instances), "samples": len(instances) * cfg.views,
             "bytes": path.stat().st_size, "seconds": round(time.perf_counter() - start, 3)}
 
@@ -171,7 +168,6 @@ class DataReport:
     manifest: dict
     new_samples: int = 0
     seconds: float = 0.0
-    extra: dict = field(default_factory=dict)
 
     def figures(self) -> dict:
         total = self.manifest["shards"]
