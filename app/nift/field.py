@@ -210,7 +210,10 @@ class NeuralField(nn.Module):
 
     def predict(self, latent: Latent, points) -> torch.Tensor:
         """SCF c_0..c_n (B, T, n + 1), or occupancy probability (B, T)."""
-        out = self.head(latent, points)
+        return self.from_head(self.head(latent, points))
+
+    def from_head(self, out: torch.Tensor) -> torch.Tensor:
+        """Head output -> SCF (de-standardised) or occupancy probability."""
         if self.config.target == "scf":
             return out * self.target_std + self.target_mean
         return torch.sigmoid(out[..., 0])
@@ -263,8 +266,3 @@ def read_card(name_or_path: str | Path = "nif") -> dict:
     if not card.is_file():
         raise FileNotFoundError(f"no model card at {card}")
     return json.loads(card.read_text())
-
-
-def as_numpy(t: torch.Tensor) -> np.ndarray:
-    """Detach a tensor to a float64 numpy array."""
-    return t.detach().cpu().numpy().astype(np.float64)

@@ -29,7 +29,7 @@ import numpy as np
 import torch
 
 from app.nift.field import NeuralField, load_field
-from app.nift.template import FEATURES, Template
+from app.nift.template import FEATURES, Template, point_features
 from app.se3 import make_pose, random_rotations
 
 
@@ -116,7 +116,7 @@ def imitate(template: Template, cloud: np.ndarray, config: ImitationConfig = Imi
     def losses(r6: torch.Tensor, t: torch.Tensor) -> torch.Tensor:
         R = rotation_from_6d(r6)  # (I, 3, 3)
         x = torch.einsum("iab,mb->ima", R, X - c_X) + c_O + t[:, None]  # (I, M, 3)
-        f = field.predict(latent, x) if feature == "scf" else field.features(latent, x)  # (I, M, F)
+        f = point_features(field, feature, latent, x)  # (I, M, F)
         return (f - target).abs().sum(dim=-1).mean(dim=-1)  # (I,)
 
     alive = torch.arange(config.inits)  # original index of each row still optimised

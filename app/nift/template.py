@@ -27,7 +27,7 @@ import torch
 from scipy.spatial import cKDTree
 
 from app.io_utils import read_npz, write_npz
-from app.nift.field import NeuralField, field_path, load_field
+from app.nift.field import Latent, NeuralField, field_path, load_field
 from app.nift.ibs import compute_ibs
 from app.nift.raycast import scene_of, signed_distance
 from app.se3 import invert, transform_points
@@ -56,9 +56,9 @@ def field_id(name_or_path: str | Path) -> str:
     return f"{Path(path).stem}:{hashlib.sha256(path.read_bytes()).hexdigest()[:12]}"
 
 
-def point_features(field: NeuralField, feature: str, cloud: np.ndarray, points) -> torch.Tensor:
-    """Features (B, T, F) of points (B, T, 3) in the field of one cloud (N, 3), differentiable in points."""
-    latent = field.encode(cloud)
+def point_features(field: NeuralField, feature: str, latent: Latent, points) -> torch.Tensor:
+    """Features (B, T, F) of a template kind ("nif", "ndf": activations; "scf": predicted SCF) at
+    points (B, T, 3) in an encoded cloud's field, differentiable in the points."""
     if feature == "scf":
         return field.predict(latent, points)
     return field.features(latent, points)
@@ -116,7 +116,7 @@ def build_template(anchor: str, anchor_mesh, demos: list[dict], query: str = "ib
     with torch.no_grad():
         for d in demos:
             x = transform_points(d["T_frame_anchor"], points)[None]  # (1, M, 3) demo frame
-            feats.append(point_features(field, feature, d["cloud"], x)[0].numpy())
+            feats.append(point_features(field, feature, field.encode(d["cloud"]), x)[0].numpy())
     return Template(points, np.mean(feats, axis=0).astype(np.float32), anchor, query, feature, field_id(weights),
                     [d.get("name", "") for d in demos])
 

@@ -17,8 +17,11 @@ def r2_per_band(pred: np.ndarray, true: np.ndarray) -> np.ndarray:
 
 def loss_of(field: NeuralField, batch: dict[str, torch.Tensor]) -> torch.Tensor:
     """L1 on standardised SCF (NIF) or binary cross entropy on occupancy logits (NDF), mean over points."""
-    latent = field.encode(batch["cloud"])
-    out = field.head(latent, batch["points"])  # (B, T, out_dim)
+    return loss_from_head(field, field.head(field.encode(batch["cloud"]), batch["points"]), batch)
+
+
+def loss_from_head(field: NeuralField, out: torch.Tensor, batch: dict[str, torch.Tensor]) -> torch.Tensor:
+    """The loss of a head output (B, T, out_dim) against the batch's labels."""
     if field.config.target == "scf":
         return torch.nn.functional.l1_loss(out, field.standardise(batch["scf"]))
     return torch.nn.functional.binary_cross_entropy_with_logits(out[..., 0], batch["occ"])
@@ -35,9 +38,9 @@ def evaluate(field: NeuralField, data: FieldData, idx: np.ndarray, cloud_points:
     for start in range(0, len(idx), batch_size):
         batch = data.batch(idx[start:start + batch_size], cloud_points, query_points, order, rng)
         batch = {k: v.to(field.device) for k, v in batch.items()}
-        losses.append(float(loss_of(field, batch)) * len(batch["cloud"]))
-        latent = field.encode(batch["cloud"])
-        pred = field.predict(latent, batch["points"])
+        out = field.head(field.encode(batch["cloud"]), batch["points"])  # one forward pass for both
+        losses.append(float(loss_from_head(field, out, batch)) * len(batch["cloud"]))
+        pred = field.from_head(out)
         key = "scf" if field.config.target == "scf" else "occ"
         preds.append(pred.reshape(-1, pred.shape[-1] if key == "scf" else 1).cpu().numpy())
         trues.append(batch[key].reshape(preds[-1].shape).cpu().numpy())

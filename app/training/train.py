@@ -133,7 +133,7 @@ def train(cfg: TrainConfig, data_dir: str | Path, out: str | Path, eval_dir: str
         save_checkpoint(out / "last.pt", model, opt, state)
     bar.close()
     best = load_field(out / "best.pt", device)
-    card = model_card(cfg, data, state, device, command)
+    card = model_card(cfg, data, state, device, command, sum(p.numel() for p in best.parameters()))
     if eval_dir is not None:
         test = FieldData(eval_dir)
         card["test"] = {"data": str(eval_dir), "split": test.config["split"],
@@ -142,9 +142,9 @@ def train(cfg: TrainConfig, data_dir: str | Path, out: str | Path, eval_dir: str
     return card
 
 
-def model_card(cfg: TrainConfig, data: FieldData, state: dict, device: torch.device, command: str) -> dict:
+def model_card(cfg: TrainConfig, data: FieldData, state: dict, device: torch.device, command: str,
+               n_params: int) -> dict:
     """What a user needs to trust (or reproduce) a weights file."""
-    n_params = sum(p.numel() for p in NeuralField(cfg.field).parameters())
     best = min(state["history"], key=lambda h: h["loss"])
     return {
         "format": "nift-field-card/1",
