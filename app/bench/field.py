@@ -6,11 +6,12 @@ import time
 
 import numpy as np
 import torch
+from tqdm import tqdm
 
 from app.nift.field import FieldConfig, NeuralField, load_field
 from app.training.data import DataConfig, make_dataset
 from app.training.dataset import FieldData
-from app.training.evaluate import loss_of
+from app.training.train import TrainConfig, run_epoch
 
 
 def data_rate(instances: int, views: int, workers: int, seed: int) -> tuple[float, str]:
@@ -22,23 +23,16 @@ def data_rate(instances: int, views: int, workers: int, seed: int) -> tuple[floa
 
 
 def train_rate(data: FieldData, field_cfg: FieldConfig, steps: int, batch_size: int = 16) -> float:
-    """Training samples per second (forward, backward, Adam step) at the default batch settings."""
+    """Training samples per second (forward, backward, Adam step) of `nift train`'s own epoch loop."""
+    cfg = TrainConfig(field=field_cfg, batch_size=batch_size)
     model = NeuralField(field_cfg)
-    opt = torch.optim.Adam(model.parameters(), lr=1e-4)
+    opt = torch.optim.Adam(model.parameters(), lr=cfg.lr)
     rng = np.random.default_rng(0)
-    idx = np.arange(data.n_samples)
-
-    def step() -> None:
-        batch = data.batch(rng.choice(idx, batch_size), 512, 500, field_cfg.scf_order, rng)
-        loss = loss_of(model, batch)
-        opt.zero_grad()
-        loss.backward()
-        opt.step()
-
-    step()  # warm-up
+    idx = rng.choice(data.n_samples, (steps + 1) * batch_size)
+    quiet = tqdm(disable=True)
+    run_epoch(model, opt, data, idx[:batch_size], cfg, rng, None, quiet)  # warm-up step
     start = time.perf_counter()
-    for _ in range(steps):
-        step()
+    run_epoch(model, opt, data, idx[batch_size:], cfg, rng, None, quiet)
     return steps * batch_size / (time.perf_counter() - start)
 
 
