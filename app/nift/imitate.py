@@ -15,7 +15,8 @@ then Adam (lr 1e-2) on (R, t) for up to `iterations` steps, stopping early once 
 initialisation has improved its loss by `tolerance` (relative) for `patience` steps. The lowest
 final loss wins. Our addition: the step size decays (cosine) to 5 % of lr by the last
 iteration - with a constant 1e-2 the pose keeps jittering by millimetres around the optimum
-(measured on a demo's own cloud: 9 mm / 9 degrees constant, 0.1 mm / 0.1 degrees decayed).
+(measured on a demo's own cloud with an early NIF checkpoint: 9 mm / 9 degrees constant,
+0.1 mm / 0.1 degrees decayed; scripts/diagnose_self_imitation.py).
 Optional (`prune_every`): drop the worse half of the initialisations every so many steps. Rotation parametrisation: the continuous 6-D representation of Zhou et al.
 (CVPR 2019) - two columns, Gram-Schmidt - which has no singularity anywhere, 180 degrees included
 (axis-angle and quaternions wrap or double-cover there).
