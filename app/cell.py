@@ -44,6 +44,16 @@ class CellConfig:
         return make_pose(rotvec_to_matrix([0.0, 0.0, yaw]), [x, y, 0.0])
 
 
+def add_fixtures(world: SimWorld, config: CellConfig) -> dict[str, int]:
+    """Build the rack and the shelf in a world at their configured poses; {name: body}."""
+    bodies = {}
+    for name in ("rack", "shelf"):
+        mesh = fixture(name).mesh
+        bodies[name] = world.add_mesh(visual_model(mesh), collision_model(mesh), config.fixture_pose(name),
+                                      rgba=(0.55, 0.4, 0.3, 1))
+    return bodies
+
+
 class SimCell:
     """Brings the whole simulated cell up and down; exposes arm, gripper and camera devices."""
 
@@ -61,11 +71,8 @@ class SimCell:
     def connect(self) -> None:
         """Start physics, build the fixtures, connect every device (idempotent)."""
         self.world.connect()
-        for name in ("rack", "shelf"):
-            if name not in self.fixtures:
-                mesh = fixture(name).mesh
-                self.fixtures[name] = self.world.add_mesh(visual_model(mesh), collision_model(mesh),
-                                                          self.config.fixture_pose(name), rgba=(0.55, 0.4, 0.3, 1))
+        if not self.fixtures:
+            self.fixtures = add_fixtures(self.world, self.config)
         for device in (self.arm, self.gripper, self.camera):
             device.connect()
 

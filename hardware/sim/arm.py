@@ -12,8 +12,8 @@ from dataclasses import dataclass
 
 import numpy as np
 import pybullet as p
-from ruckig import InputParameter, Result, Ruckig, Trajectory
 
+from app.motion.trajectory import ruckig_profile
 from app.se3 import interpolate_pose, pose_to_ur, rotation_angle, ur_to_pose
 from hardware.interfaces import Arm, JointLimits, ProtectiveStopError
 from hardware.sim.robot import HOME_Q, SimRobot
@@ -32,21 +32,6 @@ class SimArmConfig:
     tracking_error_limit: float = 0.05  # rad, any joint
     contact_force_limit: float = 150.0  # N on any arm link (not the fingers)
     settle_time: float = 0.15  # s of holding the final target after a motion
-
-
-def ruckig_profile(q0: np.ndarray, q1: np.ndarray, v_max: np.ndarray, a_max: np.ndarray,
-                   j_max: np.ndarray) -> Trajectory:
-    """Time-optimal jerk-limited rest-to-rest trajectory from q0 to q1 (Ruckig, offline)."""
-    dof = len(q0)
-    inp = InputParameter(dof)
-    inp.current_position, inp.current_velocity, inp.current_acceleration = list(q0), [0.0] * dof, [0.0] * dof
-    inp.target_position, inp.target_velocity, inp.target_acceleration = list(q1), [0.0] * dof, [0.0] * dof
-    inp.max_velocity, inp.max_acceleration, inp.max_jerk = list(v_max), list(a_max), list(j_max)
-    traj = Trajectory(dof)
-    result = Ruckig(dof).calculate(inp, traj)
-    if result not in (Result.Working, Result.Finished):
-        raise ValueError(f"Ruckig could not plan the motion ({result})")
-    return traj
 
 
 class SimArm(Arm):

@@ -1,0 +1,176 @@
+"""The executor: plan a pick-and-place motion with Pinocchio IK and Ruckig, run it through the `Arm`.
+
+Plan (all of it before the arm moves, so an unreachable place fails before the pick):
+
+    start -> pre-grasp        joint transit (Ruckig), collision-checked against table, fixtures, object hull
+    pre-grasp -> grasp        straight TCP line along the tool's approach axis (dense IK)
+    grasp -> lift             straight line up
+    lift -> pre-place         joint transit
+    pre-place -> place        straight line along the fixture's approach direction
+    place -> retreat          straight line back along the tool's approach axis
+    retreat -> clear          straight line up
+    clear -> home             joint transit
+
+A two-finger grasp turned half a turn about its approach axis is the same grasp, so both are
+planned and the one with less joint travel is kept. Transits that would collide go via home.
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from app.motion.cartesian import line_length, line_path
+from app.motion.ik import IKConfig, NoIKSolution, solutions
+from app.motion.scene import PlanningScene
+from app.motion.trajectory import JointTrajectory, concatenate, joint_segment, path_timing
+from app.se3 import make_pose, rotvec_to_matrix
+from hardware.interfaces import Arm, JointLimits
+from hardware.kinematics import UR5Kinematics
+from hardware.sim.robot import HOME_Q
+
+HALF_TURN = make_pose(rotvec_to_matrix([0.0, 0.0, np.pi]))
+OBJECT = "object"  # the planning scene's name for the observed object's hull
+
+
+@dataclass(frozen=True)
+class ExecutorConfig:
+    """Distances, speeds and tolerances of a pick-and-place motion."""
+
+    approach_distance: float = 0.10  # m, pre-grasp back along the tool's approach (z) axis
+    lift_height: float = 0.12  # m, straight up after the grasp
+    place_distance: float = 0.10  # m, pre-place back along the fixture's approach direction
+    retreat_distance: float = 0.10  # m, back along the tool axis after release
+    joint_speed: float = 1.05  # rad/s on transits (ur_rtde's moveJ default)
+    joint_acceleration: float = 1.4  # rad/s^2
+    line_speed: float = 0.15  # m/s on straight lines
+    line_acceleration: float = 0.6  # m/s^2
+    line_jerk: float = 5.0  # m/s^3
+    check_every: int = 5  # collision-check every n-th transit sample (20 ms at 250 Hz)
+    end_tolerance: float = 0.02  # rad: a segment that ends farther than this from its target failed
+    ik_candidates: int = 4  # IK solutions tried at the grasp and at the place before giving up
+    home_q: tuple[float, ...] = tuple(HOME_Q)
+    ik: IKConfig = IKConfig()
+
+
+class ExecutionError(RuntimeError):
+    """A motion did not complete (protective stop, tracking error)."""
+
+
+@dataclass
+class PickPlacePlan:
+    """The planned segments, in order, with the grasp actually used and the planning time."""
+
+    segments: list[JointTrajectory]
+    T_base_grasp: np.ndarray
+    T_base_place: np.ndarray
+    seconds: float = 0.0
+    travel: float = 0.0  # rad of joint travel, summed
+    notes: list[str] = field(default_factory=list)
+
+    def segment(self, label: str) -> JointTrajectory:
+        return next(s for s in self.segments if s.label == label)
+
+    @property
+    def duration(self) -> float:
+        return float(sum(s.duration for s in self.segments))
+
+
+class Planner:
+    """Plans joint transits and straight lines for the cell's UR5 against a planning scene."""
+
+    def __init__(self, kin: UR5Kinematics, limits: JointLimits, scene: PlanningScene,
+                 config: ExecutorConfig = ExecutorConfig()) -> None:
+        self.kin, self.limits, self.scene, self.config = kin, limits, scene, config
+
+    def transit(self, q0: np.ndarray, q1: np.ndarray, label: str, ignore: tuple[str, ...] = ()) -> JointTrajectory:
+        """A Ruckig joint motion q0 -> q1, via home if the direct one collides."""
+        c = self.config
+        direct = joint_segment(q0, q1, self.limits, c.joint_speed, c.joint_acceleration, label)
+        hits = self._collisions(direct, ignore)
+        if not hits:
+            return direct
+        home = np.asarray(self.config.home_q)
+        parts = [joint_segment(a, b, self.limits, c.joint_speed, c.joint_acceleration) for a, b in ((q0, home), (home, q1))]
+        if any(self._collisions(part, ignore) for part in parts):
+            raise NoIKSolution(f"{label}: no collision-free joint motion (direct: {', '.join(hits[:3])}; via home too)")
+        return concatenate(parts, label)
+
+    def line(self, q0: np.ndarray, T1: np.ndarray, label: str, ignore: tuple[str, ...] = ()) -> JointTrajectory:
+        """A straight TCP line from FK(q0) to T1, timed under the joint limits."""
+        T0 = self.kin.fk(q0)
+        path = line_path(self.kin, T0, T1, q0, self.scene, ignore, label)
+        c = self.config
+        return path_timing(path, line_length(T0, T1), self.limits, c.line_speed, c.line_acceleration, c.line_jerk,
+                           label)
+
+    def pick_place(self, q_start: np.ndarray, T_base_grasp: np.ndarray, T_base_place: np.ndarray,
+                   place_direction: np.ndarray) -> PickPlacePlan:
+        """The whole motion for a grasp and a place pose of the TCP; `place_direction` (3,) is the
+        unit direction the object comes from onto the fixture (base frame)."""
+        start = time.perf_counter()
+        plans, errors = [], []
+        for flip in (np.eye(4), HALF_TURN):
+            try:
+                plans.append(self._pick_place(q_start, T_base_grasp @ flip, T_base_place @ flip, place_direction))
+            except NoIKSolution as exc:
+                errors.append(str(exc))
+        if not plans:
+            raise NoIKSolution(" / ".join(dict.fromkeys(errors)))
+        best = min(plans, key=lambda p: p.travel)
+        best.seconds = time.perf_counter() - start
+        return best
+
+    def _pick_place(self, q_start, T_grasp, T_place, place_direction) -> PickPlacePlan:
+        c = self.config
+        T_pre_grasp = T_grasp @ make_pose(t=[0.0, 0.0, -c.approach_distance])
+        T_lift = make_pose(T_grasp[:3, :3], T_grasp[:3, 3] + [0.0, 0.0, c.lift_height])
+        T_pre_place = make_pose(T_place[:3, :3], T_place[:3, 3] + c.place_distance * np.asarray(place_direction))
+        T_retreat = T_place @ make_pose(t=[0.0, 0.0, -c.retreat_distance])
+        # IK at the ends of the lines first: they decide the configuration each line runs in
+        approach, lift = self._first(solutions(self.kin, T_grasp, q_start, self.scene, c.ik, (OBJECT,), "grasp"),
+                                     lambda q: (_reverse(self.line(q, T_pre_grasp, "approach", (OBJECT,))),
+                                                self.line(q, T_lift, "lift", (OBJECT,))))
+        to_pre_grasp = self.transit(q_start, approach.q[0], "to pre-grasp")
+        place, retreat = self._first(solutions(self.kin, T_place, lift.end, self.scene, c.ik, (OBJECT,), "place"),
+                                     lambda q: (_reverse(self.line(q, T_pre_place, "place", (OBJECT,))),
+                                                self.line(q, T_retreat, "retreat", (OBJECT,))))
+        carry = self.transit(lift.end, place.q[0], "carry", ignore=(OBJECT,))
+        T_clear = self.kin.fk(retreat.end)
+        T_clear[2, 3] += c.lift_height
+        clear = self.line(retreat.end, T_clear, "clear", ignore=(OBJECT,))
+        home = self.transit(clear.end, np.asarray(c.home_q), "home", ignore=(OBJECT,))
+        segments = [to_pre_grasp, approach, lift, carry, place, retreat, clear, home]
+        travel = float(sum(np.abs(np.diff(s.q, axis=0)).sum() for s in segments))
+        return PickPlacePlan(segments, T_grasp, T_place, travel=travel)
+
+    def _first(self, candidates: list[np.ndarray], plan_lines):
+        """plan_lines(q) for the first IK candidate (of at most `ik_candidates`) whose lines work."""
+        errors = []
+        for q in candidates[: self.config.ik_candidates]:
+            try:
+                return plan_lines(q)
+            except NoIKSolution as exc:
+                errors.append(str(exc))
+        raise NoIKSolution(errors[0])
+
+    def _collisions(self, traj: JointTrajectory, ignore: tuple[str, ...]) -> list[str]:
+        for q in traj.q[:: self.config.check_every]:
+            if hits := self.scene.collisions(q, ignore):
+                return hits
+        return self.scene.collisions(traj.end, ignore)
+
+
+def _reverse(traj: JointTrajectory) -> JointTrajectory:
+    """The same path run backwards (a rest-to-rest profile is time-symmetric)."""
+    return JointTrajectory(traj.times, traj.q[::-1].copy(), -traj.qd[::-1].copy(), traj.label)
+
+
+def execute(arm: Arm, traj: JointTrajectory, tolerance: float = 0.02) -> None:
+    """Run a planned trajectory on the arm; ExecutionError on a stop or if it ends off target."""
+    if not arm.executeTrajectory(traj.times, traj.q, traj.qd):
+        raise ExecutionError(f"{traj.label}: {arm.getLastError() or 'motion stopped'}")
+    error = float(np.abs(arm.getActualQ() - traj.end).max())
+    if error > tolerance:
+        raise ExecutionError(f"{traj.label}: ended {error:.3f} rad from its target")

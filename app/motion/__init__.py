@@ -1,0 +1,1 @@
+"""Motion planning for the cell: a collision model, multi-seed IK, Ruckig trajectories, Cartesian lines."""

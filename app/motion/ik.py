@@ -1,0 +1,64 @@
+"""Inverse kinematics for planning: Pinocchio damped least squares from several seeds, the
+collision-free solution nearest the current configuration."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from app.motion.scene import PlanningScene
+from hardware.kinematics import UR5Kinematics
+from hardware.sim.robot import HOME_Q
+
+
+@dataclass(frozen=True)
+class IKConfig:
+    """How hard IK tries: random seeds beyond the current and home configurations."""
+
+    random_seeds: int = 24
+    seed: int = 0
+    joint_weights: tuple[float, ...] = (2.0, 2.0, 1.5, 1.0, 1.0, 0.5)  # distance metric: move the big joints less
+
+
+class NoIKSolution(ValueError):
+    """No collision-free joint configuration reaches the pose."""
+
+
+def joint_distance(q: np.ndarray, q_ref: np.ndarray, weights: tuple[float, ...]) -> float:
+    """Weighted Euclidean distance between configurations."""
+    return float(np.linalg.norm(np.asarray(weights) * (np.asarray(q) - np.asarray(q_ref))))
+
+
+def solutions(kin: UR5Kinematics, T_base_tcp: np.ndarray, q_current: np.ndarray, scene: PlanningScene | None = None,
+              config: IKConfig = IKConfig(), ignore: tuple[str, ...] = (), what: str = "pose") -> list[np.ndarray]:
+    """Distinct collision-free IK solutions for T_base_tcp, nearest q_current first; NoIKSolution
+    (out of reach, or every solution collides - with what) if there is none."""
+    rng = np.random.default_rng(config.seed)
+    seeds = [np.asarray(q_current, float), HOME_Q,
+             *rng.uniform(np.maximum(kin.lower, -np.pi), np.minimum(kin.upper, np.pi), (config.random_seeds, 6))]
+    found: list[np.ndarray] = []
+    reached, blocked = 0, set()
+    for seed in seeds:
+        q = kin.ik(T_base_tcp, seed)
+        if q is None:
+            continue
+        q = kin.nearest_equivalent(q, q_current)
+        reached += 1
+        if any(np.abs(q - other).max() < 1e-3 for other in found):
+            continue
+        if scene is not None and (hits := scene.collisions(q, ignore)):
+            blocked.update(hits)
+            continue
+        found.append(q)
+    if not found:
+        xyz = np.round(T_base_tcp[:3, 3], 3).tolist()
+        if reached == 0:
+            raise NoIKSolution(f"no IK solution for the {what} at {xyz} (out of reach)")
+        raise NoIKSolution(f"every IK solution for the {what} at {xyz} collides ({', '.join(sorted(blocked)[:4])})")
+    return sorted(found, key=lambda q: joint_distance(q, q_current, config.joint_weights))
+
+
+def solve(kin: UR5Kinematics, T_base_tcp: np.ndarray, q_current: np.ndarray, scene: PlanningScene | None = None,
+          config: IKConfig = IKConfig(), ignore: tuple[str, ...] = (), what: str = "pose") -> np.ndarray:
+    """The collision-free IK solution for T_base_tcp nearest q_current; NoIKSolution says why not."""
+    return solutions(kin, T_base_tcp, q_current, scene, config, ignore, what)[0]

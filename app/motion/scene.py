@@ -1,0 +1,107 @@
+"""The planning scene: a collision model of the cell in its own PyBullet client (DIRECT, no physics).
+
+It holds the robot with its gripper, the table, the rack and the shelf at their configured poses,
+and obstacles added at run time (the convex hull of the observed object). `collisions(q)` names
+what the arm would hit at joint positions q. It is a model built from the cell's configuration,
+as a real cell's planner would have - it never looks at the simulated world the arm moves in.
+The held object is not modelled (a known limit).
+"""
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import pybullet as p
+
+from app.cell import CellConfig, add_fixtures
+from hardware.sim.robot import HOME_Q, SimRobot
+from hardware.sim.world import SimWorld, SimWorldConfig
+
+GRIPPER_LINKS = ("gripper_palm", "finger_left", "finger_right")
+ARM_LINKS = ("shoulder_link", "upper_arm_link", "forearm_link", "wrist_1_link", "wrist_2_link", "wrist_3_link")
+ON_TABLE = ("base_link", "shoulder_link")  # bolted to the table: never checked against it
+
+
+class PlanningScene:
+    """Collision queries for joint configurations of the cell's UR5."""
+
+    def __init__(self, config: CellConfig = CellConfig(), margin: float = 0.005) -> None:
+        self.margin = margin  # metres of clearance that count as a collision
+        self.world = SimWorld(SimWorldConfig(gui=False))
+        self.world.connect()
+        self.robot = SimRobot(self.world)
+        self.robot.load()
+        self.obstacles: dict[str, int] = {"table": self.world.table, **add_fixtures(self.world, config)}
+        self.links = {name: self.robot.links[name] for name in ("base_link", *ARM_LINKS, *GRIPPER_LINKS)}
+        self.self_pairs = self._self_pairs()
+
+    @property
+    def client(self) -> int:
+        return self.world.require()
+
+    def close(self) -> None:
+        """Free the collision model's client."""
+        self.world.disconnect()
+
+    def set_q(self, q: np.ndarray) -> None:
+        """Put the model arm at q (fingers fully open: the widest the gripper gets)."""
+        self.robot.reset_arm(q)
+        for joint in self.robot.finger_joints:
+            p.resetJointState(self.robot.body, joint, self.robot.geometry.stroke / 2, 0.0, physicsClientId=self.client)
+
+    def add_cloud(self, name: str, points: np.ndarray, eye: np.ndarray | None = None, depth: float = 0.05) -> None:
+        """An obstacle from a single-view cloud (N, 3) in the base frame: the convex hull of the
+        points, their shadow `depth` further along the rays from the camera at `eye` (the unseen
+        back), and the footprint of both on the table (z = 0)."""
+        self.remove(name)
+        points = np.asarray(points, float)
+        parts = [points]
+        if eye is not None:
+            rays = points - np.asarray(eye, float)
+            parts.append(points + depth * rays / np.linalg.norm(rays, axis=1, keepdims=True))
+        solid = np.concatenate(parts)
+        footprint = solid * [1.0, 1.0, 0.0]
+        shape = p.createCollisionShape(p.GEOM_MESH, vertices=np.concatenate([solid, footprint]).tolist(),
+                                       physicsClientId=self.client)
+        self.obstacles[name] = p.createMultiBody(0.0, shape, physicsClientId=self.client)
+
+    def remove(self, name: str) -> None:
+        """Drop a run-time obstacle (no-op if absent)."""
+        body = self.obstacles.pop(name, None)
+        if body is not None:
+            p.removeBody(body, physicsClientId=self.client)
+
+    def collisions(self, q: np.ndarray, ignore: tuple[str, ...] = ()) -> list[str]:
+        """Names of the contacts ('forearm_link-table', 'wrist_3_link-upper_arm_link', ...) at q, nearer
+        than the margin; obstacles named in `ignore` are skipped."""
+        self.set_q(q)
+        found = []
+        for obstacle, body in self.obstacles.items():
+            if obstacle in ignore:
+                continue
+            for link, index in self.links.items():
+                if obstacle == "table" and link in ON_TABLE:
+                    continue
+                if self._near(self.robot.body, body, index, -1):
+                    found.append(f"{link}-{obstacle}")
+        for a, b in self.self_pairs:
+            if self._near(self.robot.body, self.robot.body, self.links[a], self.links[b]):
+                found.append(f"{a}-{b}")
+        return found
+
+    def _near(self, body_a: int, body_b: int, link_a: int, link_b: int) -> bool:
+        return len(p.getClosestPoints(body_a, body_b, self.margin, link_a, link_b, physicsClientId=self.client)) > 0
+
+    def _self_pairs(self) -> list[tuple[str, str]]:
+        """Link pairs that can collide: not neighbours in the chain (those touch by design), not both
+        gripper parts, and clear of each other at the home configuration."""
+        chain = ["base_link", *ARM_LINKS, "gripper"]
+        rank = {name: chain.index("gripper" if name in GRIPPER_LINKS else name) for name in self.links}
+        self.set_q(HOME_Q)
+        pairs = []
+        for a, b in itertools.combinations(self.links, 2):
+            if abs(rank[a] - rank[b]) < 2:
+                continue
+            if not self._near(self.robot.body, self.robot.body, self.links[a], self.links[b]):
+                pairs.append((a, b))
+        return pairs

@@ -1,0 +1,105 @@
+"""Joint trajectories: Ruckig rest-to-rest segments chained through waypoints, sampled for execution.
+
+The free Ruckig computes state-to-state motions only (its intermediate-waypoint feature calls a
+remote service and is never used here), so a path through waypoints is a chain of time-optimal,
+jerk-limited rest-to-rest segments - each segment is optimal, the chain stops at every waypoint.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from ruckig import InputParameter, Result, Ruckig, Trajectory
+
+from hardware.interfaces import JointLimits
+
+SAMPLE_PERIOD = 1.0 / 250.0  # s between trajectory samples streamed to the arm
+
+
+@dataclass
+class JointTrajectory:
+    """A timed joint path: times (T,) from 0, positions (T, D), velocities (T, D)."""
+
+    times: np.ndarray
+    q: np.ndarray
+    qd: np.ndarray
+    label: str = ""
+
+    @property
+    def duration(self) -> float:
+        return float(self.times[-1])
+
+    @property
+    def end(self) -> np.ndarray:
+        return self.q[-1]
+
+
+def ruckig_profile(q0: np.ndarray, q1: np.ndarray, v_max: np.ndarray, a_max: np.ndarray,
+                   j_max: np.ndarray) -> Trajectory:
+    """Time-optimal jerk-limited rest-to-rest trajectory from q0 to q1 (Ruckig, offline)."""
+    dof = len(q0)
+    inp = InputParameter(dof)
+    inp.current_position, inp.current_velocity, inp.current_acceleration = list(q0), [0.0] * dof, [0.0] * dof
+    inp.target_position, inp.target_velocity, inp.target_acceleration = list(q1), [0.0] * dof, [0.0] * dof
+    inp.max_velocity, inp.max_acceleration, inp.max_jerk = list(v_max), list(a_max), list(j_max)
+    traj = Trajectory(dof)
+    result = Ruckig(dof).calculate(inp, traj)
+    if result not in (Result.Working, Result.Finished):
+        raise ValueError(f"Ruckig could not plan the motion ({result})")
+    return traj
+
+
+def sample_profile(profile: Trajectory, period: float = SAMPLE_PERIOD) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(times (T,), positions (T, D), velocities (T, D)) of a Ruckig trajectory, both ends included."""
+    n = max(2, int(np.ceil(profile.duration / period)) + 1)
+    times = np.linspace(0.0, profile.duration, n)
+    states = [profile.at_time(t) for t in times]
+    return times, np.array([s[0] for s in states]), np.array([s[1] for s in states])
+
+
+def joint_segment(q0: np.ndarray, q1: np.ndarray, limits: JointLimits, speed: float = 1.05,
+                  acceleration: float = 1.4, label: str = "") -> JointTrajectory:
+    """One rest-to-rest joint motion, at most `speed` rad/s and `acceleration` rad/s^2 on any joint
+    (ur_rtde's moveJ defaults) and never beyond the limits."""
+    profile = ruckig_profile(np.asarray(q0, float), np.asarray(q1, float), np.minimum(speed, limits.velocity),
+                             np.minimum(acceleration, limits.acceleration), limits.jerk)
+    return JointTrajectory(*sample_profile(profile), label=label)
+
+
+def through_waypoints(waypoints: list[np.ndarray], limits: JointLimits, speed: float = 1.05,
+                      acceleration: float = 1.4, label: str = "") -> JointTrajectory:
+    """Chain rest-to-rest segments through joint waypoints into one trajectory."""
+    if len(waypoints) < 2:
+        raise ValueError("a trajectory needs at least two waypoints")
+    parts = [joint_segment(a, b, limits, speed, acceleration) for a, b in zip(waypoints[:-1], waypoints[1:])]
+    return concatenate(parts, label)
+
+
+def concatenate(parts: list[JointTrajectory], label: str = "") -> JointTrajectory:
+    """One trajectory of consecutive parts (each starts where the previous one ends, at rest)."""
+    times, q, qd, offset = [], [], [], 0.0
+    for i, part in enumerate(parts):
+        skip = 0 if i == 0 else 1  # the joint sample is shared
+        times.append(part.times[skip:] + offset)
+        q.append(part.q[skip:])
+        qd.append(part.qd[skip:])
+        offset += part.duration
+    return JointTrajectory(np.concatenate(times), np.concatenate(q), np.concatenate(qd), label)
+
+
+def path_timing(q_path: np.ndarray, length: float, limits: JointLimits, speed: float, acceleration: float,
+                jerk: float, label: str = "") -> JointTrajectory:
+    """Time a geometric joint path q_path (K, D) (uniform in the path parameter s in [0, length])
+    with a 1-D Ruckig profile on s, capped so that no joint exceeds its velocity or acceleration
+    limit: |dq/dt| = |dq/ds| ds/dt."""
+    s_grid = np.linspace(0.0, length, len(q_path))
+    dq_ds = np.abs(np.diff(q_path, axis=0)) / max(length / (len(q_path) - 1), 1e-12)  # (K-1, D)
+    worst = np.maximum(dq_ds.max(axis=0), 1e-9)  # (D,)
+    v = min(speed, float(np.min(limits.velocity / worst)))
+    a = min(acceleration, float(np.min(limits.acceleration / worst)))
+    profile = ruckig_profile(np.zeros(1), np.array([length]), np.array([v]), np.array([a]), np.array([jerk]))
+    times, s, sd = sample_profile(profile)
+    s, sd = s[:, 0], sd[:, 0]
+    q = np.stack([np.interp(s, s_grid, q_path[:, j]) for j in range(q_path.shape[1])], axis=1)
+    slope = np.stack([np.interp(s, s_grid[:-1], np.diff(q_path[:, j]) / np.diff(s_grid)) for j in range(q_path.shape[1])], axis=1)
+    return JointTrajectory(times, q, slope * sd[:, None], label)
