@@ -7,9 +7,9 @@ import sys
 
 from app import __version__
 from app.commands import (bench_cell, bench_field, bench_geometry, bench_imitation, calibrate, capture, imitate,
-                          make_data, objects, sim, teach, train)
+                          make_data, objects, run, sim, teach, train)
 
-COMMANDS = [objects, sim, calibrate, capture, make_data, train, teach, imitate, bench_geometry, bench_cell,
+COMMANDS = [run, objects, sim, calibrate, capture, make_data, train, teach, imitate, bench_geometry, bench_cell,
             bench_field, bench_imitation]
 
 

@@ -12,7 +12,8 @@ Plan (all of it before the arm moves, so an unreachable place fails before the p
     clear -> home             joint transit
 
 A two-finger grasp turned half a turn about its approach axis is the same grasp, so both are
-planned and the one with less joint travel is kept. Transits that would collide go via home.
+planned and the one with less joint travel is kept. Transits that would collide go through via
+points above their ends, or home.
 """
 from __future__ import annotations
 
@@ -40,6 +41,7 @@ class ExecutorConfig:
 
     approach_distance: float = 0.10  # m, pre-grasp back along the tool's approach (z) axis
     lift_height: float = 0.12  # m, straight up after the grasp
+    via_height: float = 0.15  # m, how far above a transit's end its via points are
     place_distance: float = 0.10  # m, pre-place back along the fixture's approach direction
     retreat_distance: float = 0.10  # m, back along the tool axis after release
     joint_speed: float = 1.05  # rad/s on transits (ur_rtde's moveJ default)
@@ -85,17 +87,37 @@ class Planner:
         self.kin, self.limits, self.scene, self.config = kin, limits, scene, config
 
     def transit(self, q0: np.ndarray, q1: np.ndarray, label: str, ignore: tuple[str, ...] = ()) -> JointTrajectory:
-        """A Ruckig joint motion q0 -> q1, via home if the direct one collides."""
-        c = self.config
-        direct = joint_segment(q0, q1, self.limits, c.joint_speed, c.joint_acceleration, label)
-        hits = self._collisions(direct, ignore)
-        if not hits:
-            return direct
-        home = np.asarray(self.config.home_q)
-        parts = [joint_segment(a, b, self.limits, c.joint_speed, c.joint_acceleration) for a, b in ((q0, home), (home, q1))]
-        if any(self._collisions(part, ignore) for part in parts):
-            raise NoIKSolution(f"{label}: no collision-free joint motion (direct: {', '.join(hits[:3])}; via home too)")
-        return concatenate(parts, label)
+        """A collision-free chain of Ruckig joint motions q0 -> q1: direct, else through the first
+        via points that work - above the goal, above both ends, or home (no sampling planner)."""
+        first_hits = None
+        for via in self._via_candidates(q0, q1):
+            waypoints = [q0, *via, q1]
+            parts = [joint_segment(a, b, self.limits, self.config.joint_speed, self.config.joint_acceleration)
+                     for a, b in zip(waypoints[:-1], waypoints[1:])]
+            hits = next((h for part in parts if (h := self._collisions(part, ignore))), None)
+            if hits is None:
+                return concatenate(parts, label)
+            first_hits = first_hits or hits
+        raise NoIKSolution(f"{label}: no collision-free joint motion ({', '.join(first_hits[:3])} on the direct one; "
+                           f"via points above the ends and via home collide too)")
+
+    def _via_candidates(self, q0: np.ndarray, q1: np.ndarray) -> list[list[np.ndarray]]:
+        """[], [above q1], [above q0, above q1], [home] - those whose IK exists."""
+        up0, up1 = self._above(q0), self._above(q1)
+        candidates = [[]]
+        if up1 is not None:
+            candidates.append([up1])
+            if up0 is not None:
+                candidates.append([up0, up1])
+        candidates.append([np.asarray(self.config.home_q)])
+        return candidates
+
+    def _above(self, q: np.ndarray) -> np.ndarray | None:
+        """The configuration with the TCP via_height higher, same orientation, near q (or None)."""
+        T = self.kin.fk(q)
+        T[2, 3] += self.config.via_height
+        q_up = self.kin.ik(T, q)
+        return None if q_up is None or np.abs(q_up - q).max() > 1.5 else q_up
 
     def line(self, q0: np.ndarray, T1: np.ndarray, label: str, ignore: tuple[str, ...] = ()) -> JointTrajectory:
         """A straight TCP line from FK(q0) to T1, timed under the joint limits."""

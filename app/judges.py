@@ -9,7 +9,8 @@ Both judges consume the scene: they move the object. Run them on a freshly spawn
   (it may have swung in the grasp; it has not dropped).
 - place: the object is set at the predicted pose, released, object-table collisions off, and
   simulated PLACE_TIME: success if it rests (slower than REST_SPEED) touching the rack/shelf,
-  not the floor, and - on the shelf - stands within UPRIGHT_TOLERANCE_DEG of upright.
+  not the floor or the table, and - on the shelf - stands within UPRIGHT_TOLERANCE_DEG of upright,
+  or - on the rack - hangs (no contact lower than HANG_HEIGHT: a mug on the rack's foot is a miss).
 """
 from __future__ import annotations
 
@@ -32,6 +33,7 @@ TOUCH_DISTANCE = 0.002  # m: a finger this close to the object still holds it
 PLACE_TIME = 2.0  # s
 REST_SPEED = 0.05  # m/s
 UPRIGHT_TOLERANCE_DEG = 30.0
+HANG_HEIGHT = 0.05  # m: on the rack, every contact must be this far above its foot (hanging, not standing)
 
 
 @dataclass(frozen=True)
@@ -102,12 +104,12 @@ def judge_place(world: SimWorld, obj: SpawnedObject, T_world_obj: np.ndarray, fi
     world.set_pose(obj.body, T_world_obj)
     try:
         world.step(int(PLACE_TIME / world.config.time_step))
-        return _resting_verdict(world, obj, fixture_body, upright)
+        return resting_verdict(world, obj, fixture_body, upright)
     finally:
         _set_collision(world, obj.body, world.table, True)
 
 
-def _resting_verdict(world: SimWorld, obj: SpawnedObject, fixture_body: int, upright: bool) -> Verdict:
+def resting_verdict(world: SimWorld, obj: SpawnedObject, fixture_body: int, upright: bool) -> Verdict:
     """Where the object ended up after the place judge's simulation."""
     cid = world.require()
     speed = np.linalg.norm(p.getBaseVelocity(obj.body, physicsClientId=cid)[0])
@@ -115,6 +117,12 @@ def _resting_verdict(world: SimWorld, obj: SpawnedObject, fixture_body: int, upr
         return Verdict(False, "object fell to the floor")
     if not world.in_contact(obj.body, fixture_body):
         return Verdict(False, "object does not touch the fixture")
+    if world.in_contact(obj.body, world.table):
+        return Verdict(False, "object rests on the table")
+    if not upright:
+        lowest = min(c[5][2] for c in p.getContactPoints(obj.body, fixture_body, physicsClientId=cid))
+        if lowest - world.pose(fixture_body)[2, 3] < HANG_HEIGHT:
+            return Verdict(False, f"object is not hanging (touches the rack {100 * lowest:.1f} cm above the table)")
     if speed > REST_SPEED:
         return Verdict(False, f"object still moving ({speed:.2f} m/s)")
     if upright:

@@ -10,3 +10,5 @@ def check_method(method: str) -> str:
     if method not in METHODS:
         raise ValueError(f"unknown method {method!r}; choose one of {', '.join(METHODS)}")
     return "ibs-nif" if method == "nift" else method
+ORACLE = "teacher"  # the scripted teacher's poses from the simulator's ground truth (an upper bound)
+SIM_METHODS = (*METHODS, ORACLE)  # what the simulated jobs and benchmark accept

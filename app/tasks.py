@@ -23,6 +23,10 @@ class Task:
         """Whether the place must leave the object upright (shelf tasks)."""
         return self.fixture == "shelf"
 
+    def place_direction(self, T_base_fixture: np.ndarray) -> np.ndarray:
+        """Unit direction (base frame) the object comes from onto the fixture."""
+        return T_base_fixture[:3, :3] @ np.asarray(fixture(self.fixture).landmarks["approach"])
+
 
 TASKS = {
     "mug": Task("mug", "mug", "rack"),  # grasp the rim, hang the handle on the peg

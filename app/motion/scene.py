@@ -49,7 +49,7 @@ class PlanningScene:
         for joint in self.robot.finger_joints:
             p.resetJointState(self.robot.body, joint, self.robot.geometry.stroke / 2, 0.0, physicsClientId=self.client)
 
-    def add_cloud(self, name: str, points: np.ndarray, eye: np.ndarray | None = None, depth: float = 0.05) -> None:
+    def add_cloud(self, name: str, points: np.ndarray, eye: np.ndarray | None = None, depth: float = 0.03) -> None:
         """An obstacle from a single-view cloud (N, 3) in the base frame: the convex hull of the
         points, their shadow `depth` further along the rays from the camera at `eye` (the unseen
         back), and the footprint of both on the table (z = 0)."""

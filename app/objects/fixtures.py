@@ -31,7 +31,8 @@ SHELF_LEG_WIDTH = 0.03
 
 @dataclass(frozen=True)
 class Fixture:
-    """A static fixture: its mesh (fixture frame) and landmarks (fixture frame, metres)."""
+    """A static fixture: its mesh (fixture frame) and landmarks (fixture frame, metres); the
+    `approach` landmark is the unit direction an object comes from when it is put on it."""
 
     name: str
     mesh: trimesh.Trimesh = field(repr=False)
@@ -58,6 +59,7 @@ def rack() -> Fixture:
         "peg_origin": tuple(map(float, origin)), "peg_tip": tuple(map(float, tip)),
         "peg_direction": tuple(map(float, direction)),
         "peg_radius": RACK_PEG_RADIUS, "peg_length": RACK_PEG_LENGTH,
+        "approach": tuple(map(float, direction)),  # a mug comes onto the peg from its tip
     })
 
 
@@ -69,6 +71,7 @@ def shelf() -> Fixture:
     legs = [_box((sx, SHELF_LEG_WIDTH, leg_h), (0.0, s * (sy - SHELF_LEG_WIDTH) / 2, leg_h / 2)) for s in (-1, 1)]
     return Fixture("shelf", to_trimesh(board + legs[0] + legs[1]), {
         "top_center": (0.0, 0.0, SHELF_TOP), "top_size": (sx, sy),
+        "approach": (0.0, 0.0, 1.0),  # objects come down onto the board
     })
 
 

@@ -1,0 +1,19 @@
+"""The oracle: the scripted teacher's grasp and place for an object whose mesh and pose the
+simulator knows - the upper bound that checks the cell and the judges without the method."""
+from __future__ import annotations
+
+import numpy as np
+import trimesh
+
+from app.methods import ORACLE
+from app.predict import Prediction
+from app.se3 import invert
+from app.tasks import Task, teacher_grasp, teacher_place
+
+
+def teacher_prediction(t: Task, mesh: trimesh.Trimesh, scale: float, T_base_obj: np.ndarray,
+                       T_base_fixture: np.ndarray) -> Prediction:
+    """The teacher's poses as a Prediction: grasp T_base_obj @ T_obj_tcp; motion to the teacher's place."""
+    goal = T_base_fixture @ teacher_place(t, mesh, scale)
+    motion = goal @ invert(T_base_obj)
+    return Prediction(ORACLE, T_base_obj @ teacher_grasp(mesh), invert(motion) @ T_base_fixture, motion)

@@ -1,0 +1,112 @@
+"""Jobs in the simulated cell: an unseen test-split object spawned per job, the simulator's
+hooks (release an arbitrary-pose object once the fingers close, check where it came to rest,
+key-frame pictures), and series of jobs.
+
+Between jobs the simulated operator clears the cell: the object is removed and, if a failed job
+left the arm elsewhere, it is put back home and any protective stop is unlocked.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+from app.cell import SimCell
+from app.jobs import JobConfig, JobHooks, JobResult, run_job
+from app.judges import resting_verdict
+from app.methods import ORACLE
+from app.motion.scene import PlanningScene
+from app.objects import split
+from app.oracle import teacher_prediction
+from app.snapshots import save_strip, snapshot
+from app.spawn import SCALE_RANGE, SpawnedObject, release, spawn
+from app.tasks import Task
+
+SETTLE_TIME = 1.0  # s the object is left to come to rest before the verdict
+
+
+@dataclass(frozen=True)
+class JobSpec:
+    """Which object a simulated job gets: the task, the pose setting, and the seed that picks the
+    test-split instance, its scale and its pose."""
+
+    task: Task
+    seed: int
+    pose: str = "upright"
+
+
+class SimHooks(JobHooks):
+    """The simulator's side of a job."""
+
+    def __init__(self, cell: SimCell, obj: SpawnedObject, t: Task, record: bool = False) -> None:
+        self.cell, self.obj, self.task, self.record = cell, obj, t, record
+        self.frames: list[np.ndarray] = []
+
+    def on_grasped(self) -> None:
+        release(self.cell.world, self.obj)  # an arbitrary-pose object was held in mid-air until now
+
+    def keyframe(self, label: str) -> None:
+        if self.record:
+            self.frames.append(snapshot(self.cell.world, label))
+
+    def verify(self) -> tuple[bool, str]:
+        world = self.cell.world
+        world.step(int(SETTLE_TIME / world.config.time_step))
+        verdict = resting_verdict(world, self.obj, self.cell.fixtures[self.task.fixture], self.task.upright)
+        return verdict.success, verdict.reason
+
+
+def spawn_test_object(cell: SimCell, spec: JobSpec) -> SpawnedObject:
+    """The job's unseen object: instance, scale and pose all drawn from the spec's seed."""
+    rng = np.random.default_rng([spec.seed, 7])
+    instance = int(rng.choice(split(spec.task.category, "test")))
+    return spawn(cell.world, spec.task.category, instance, spec.pose, scale=float(rng.uniform(*SCALE_RANGE)), rng=rng)
+
+
+def reset_arm(cell: SimCell) -> None:
+    """Put the arm home and open the gripper (the simulated operator's reset between jobs)."""
+    home = np.asarray(cell.config.arm.home_q)
+    if cell.arm.isProtectiveStopped():
+        cell.arm.unlockProtectiveStop()
+    if np.abs(cell.arm.getActualQ() - home).max() > 1e-3:
+        cell.robot.reset_arm(home)
+    cell.gripper.open()
+
+
+def run_sim_job(cell: SimCell, scene: PlanningScene, T_base_cam: np.ndarray, spec: JobSpec,
+                config: JobConfig = JobConfig(), record: Path | None = None) -> JobResult:
+    """Spawn the spec's object, run the job, remove the object; the strip goes to `record`."""
+    reset_arm(cell)
+    obj = spawn_test_object(cell, spec)
+    hooks = SimHooks(cell, obj, spec.task, record is not None)
+    try:
+        hooks.keyframe("start")
+        T_base_fixture = cell.config.fixture_pose(spec.task.fixture)
+        predictor = None
+        if config.method == ORACLE:
+            T_base_obj = cell.world.pose(obj.body)
+            predictor = lambda cloud: teacher_prediction(spec.task, obj.mesh, obj.scale, T_base_obj, T_base_fixture)  # noqa: E731
+        result = run_job(spec.task, cell.arm, cell.gripper, cell.camera, T_base_cam, T_base_fixture, scene, config,
+                         hooks, predictor)
+        if not result.success:
+            hooks.keyframe(f"failed at {result.failed_stage}")
+    finally:
+        cell.world.remove(obj.body)
+    result.info = {"seed": spec.seed, "pose": spec.pose, "instance": obj.seed, "scale": round(obj.scale, 4)}
+    if record is not None:
+        result.info["record"] = str(save_strip(hooks.frames, record))
+    return result
+
+
+def run_series(cell: SimCell, scene: PlanningScene, T_base_cam: np.ndarray, specs: list[JobSpec],
+               config: JobConfig = JobConfig(), on_result: Callable[[JobResult], None] = lambda r: None,
+               record: Path | None = None) -> list[JobResult]:
+    """Run jobs one after the other; `record` (a .png) gets one strip per job, numbered if several."""
+    results = []
+    for i, spec in enumerate(specs):
+        path = record if record is None or len(specs) == 1 else record.with_name(f"{record.stem}-{i:02d}{record.suffix}")
+        results.append(run_sim_job(cell, scene, T_base_cam, spec, config, path))
+        on_result(results[-1])
+    return results
