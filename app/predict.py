@@ -57,7 +57,7 @@ def predict(t: Task, cloud: np.ndarray, method: str = "nift", T_base_fixture: np
             directory: Path | None = None, config: ImitationConfig = ImitationConfig()) -> Prediction:
     """Grasp pose and place motion for a target cloud (N, 3) in the base frame."""
     key = check_method(method)
-    directory = directory or DEMOS_DIR / t.name
+    directory = directory or DEMOS_DIR / t.demos
     if T_base_fixture is None:
         from app.cell import CellConfig
 

@@ -116,7 +116,7 @@ def build_task_templates(t: Task, demos: list[Demo], query: str = "ibs", feature
 def task_templates(t: Task, directory: Path | None = None, query: str = "ibs", feature: str = "nif",
                    rebuild: bool = False) -> dict[str, Template]:
     """A task's templates from its directory, built from the demos (and saved) when missing or asked."""
-    directory = directory or DEMOS_DIR / t.name
+    directory = directory or DEMOS_DIR / t.demos
     paths = {s: template_path(directory, s, query, feature) for s in STAGES}
     if not rebuild and all(p.is_file() for p in paths.values()):
         return {s: load_template(p) for s, p in paths.items()}

@@ -23,6 +23,7 @@ from app.oracle import teacher_prediction
 from app.snapshots import save_strip, snapshot
 from app.spawn import SCALE_RANGE, SpawnedObject, release, spawn
 from app.tasks import Task
+from hardware.sim.world import SimWorld
 
 SETTLE_TIME = 1.0  # s the object is left to come to rest before the verdict
 
@@ -33,7 +34,7 @@ class JobSpec:
     test-split instance, its scale and its pose."""
 
     task: Task
-    seed: int
+    seed: int | tuple[int, ...]
     pose: str = "upright"
 
 
@@ -58,11 +59,10 @@ class SimHooks(JobHooks):
         return verdict.success, verdict.reason
 
 
-def spawn_test_object(cell: SimCell, spec: JobSpec) -> SpawnedObject:
-    """The job's unseen object: instance, scale and pose all drawn from the spec's seed."""
-    rng = np.random.default_rng([spec.seed, 7])
-    instance = int(rng.choice(split(spec.task.category, "test")))
-    return spawn(cell.world, spec.task.category, instance, spec.pose, scale=float(rng.uniform(*SCALE_RANGE)), rng=rng)
+def spawn_test_object(world: SimWorld, t: Task, pose: str, rng: np.random.Generator) -> SpawnedObject:
+    """An unseen object: test-split instance, uniform scale and the pose setting's pose, all from rng."""
+    instance = int(rng.choice(split(t.category, "test")))
+    return spawn(world, t.category, instance, pose, scale=float(rng.uniform(*SCALE_RANGE)), rng=rng)
 
 
 def reset_arm(cell: SimCell) -> None:
@@ -79,7 +79,7 @@ def run_sim_job(cell: SimCell, scene: PlanningScene, T_base_cam: np.ndarray, spe
                 config: JobConfig = JobConfig(), record: Path | None = None) -> JobResult:
     """Spawn the spec's object, run the job, remove the object; the strip goes to `record`."""
     reset_arm(cell)
-    obj = spawn_test_object(cell, spec)
+    obj = spawn_test_object(cell.world, spec.task, spec.pose, np.random.default_rng(spec.seed))
     hooks = SimHooks(cell, obj, spec.task, record is not None)
     try:
         hooks.keyframe("start")

@@ -17,6 +17,12 @@ class Task:
     name: str
     category: str
     fixture: str  # "rack" or "shelf"
+    demo_task: str = ""  # whose demos it imitates (out-of-domain tasks borrow another's); "" = its own
+
+    @property
+    def demos(self) -> str:
+        """The task directory name under demos/ whose demos this task imitates."""
+        return self.demo_task or self.name
 
     @property
     def upright(self) -> bool:
@@ -35,11 +41,19 @@ TASKS = {
 }
 
 
+# Out of domain (paper Table II): demos of one category, objects of another.
+OUT_OF_DOMAIN = {
+    "bowl-demos-on-mug": Task("bowl-demos-on-mug", "mug", "shelf", demo_task="bowl"),
+    "bottle-demos-on-vase": Task("bottle-demos-on-vase", "vase", "shelf", demo_task="bottle"),
+}
+
+
 def task(name: str) -> Task:
-    """A task by name, or a one-line error listing the known ones."""
-    if name not in TASKS:
-        raise ValueError(f"unknown task {name!r}; choose one of {', '.join(TASKS)}")
-    return TASKS[name]
+    """A task by name (in-domain or out-of-domain), or a one-line error listing the known ones."""
+    known = {**TASKS, **OUT_OF_DOMAIN}
+    if name not in known:
+        raise ValueError(f"unknown task {name!r}; choose one of {', '.join(known)}")
+    return known[name]
 
 
 def teacher_grasp(mesh: trimesh.Trimesh) -> np.ndarray:

@@ -1,0 +1,50 @@
+"""`nift bench-jobs`: executed pick-and-place in the sim cell - planning time, trajectory length,
+job wall time and success over a series of jobs per task, with the failures counted by stage."""
+from __future__ import annotations
+
+from collections import Counter
+from typing import Callable
+
+import numpy as np
+
+from app.cell import CellConfig, SimCell
+from app.jobs import JobConfig, JobResult
+from app.motion.scene import PlanningScene
+from app.sim_jobs import JobSpec, run_series
+from app.tasks import task
+
+
+def summarise(name: str, results: list[JobResult]) -> dict:
+    """Figures of one task's series."""
+    planned = [r for r in results if r.plan]
+    wall = [sum(r.seconds.values()) for r in results]
+    failures = Counter(r.failed_stage for r in results if not r.success)
+    out = {
+        f"{name}_success": f"{sum(r.success for r in results)}/{len(results)}",
+        f"{name}_success_rate": round(float(np.mean([r.success for r in results])), 3),
+        f"{name}_median_job_seconds": round(float(np.median(wall)), 2),
+        f"{name}_median_imitate_seconds": round(float(np.median([r.seconds.get("imitate", 0.0) for r in results])), 2),
+    }
+    if planned:
+        out[f"{name}_median_planning_seconds"] = round(float(np.median([r.plan["planning_seconds"] for r in planned])), 3)
+        out[f"{name}_median_trajectory_seconds"] = round(float(np.median([r.plan["trajectory_seconds"] for r in planned])), 2)
+    out[f"{name}_failures"] = dict(sorted(failures.items())) or "none"
+    return out
+
+
+def run_jobs_benchmark(jobs: int = 20, method: str = "nift", pose: str = "upright", seed: int = 0,
+                       tasks: tuple[str, ...] = ("mug", "bowl", "bottle"), cell_config: CellConfig = CellConfig(),
+                       T_base_cam: np.ndarray | None = None, progress: Callable[[JobResult], None] = lambda r: None) -> dict:
+    """Run `jobs` jobs per task (seeds seed .. seed + jobs - 1) and summarise them."""
+    figures: dict = {"method": method, "pose": pose, "jobs_per_task": jobs}
+    with SimCell(cell_config) as cell:
+        scene = PlanningScene(cell_config)
+        T_cam = np.array(cell.camera.config.T_base_cam) if T_base_cam is None else T_base_cam
+        try:
+            for name in tasks:
+                specs = [JobSpec(task(name), seed + i, pose) for i in range(jobs)]
+                results = run_series(cell, scene, T_cam, specs, JobConfig(method=method), progress)
+                figures.update(summarise(name, results))
+        finally:
+            scene.close()
+    return figures

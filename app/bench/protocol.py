@@ -1,0 +1,104 @@
+"""The benchmark protocol (DESIGN.md, after NDF): which objects, poses and clouds each trial gets.
+
+A trial is (task, pose setting, index). Its seed fixes the unseen test-split instance, the
+uniform random scale, the pose (upright: random yaw and place on the table; arbitrary: Haar
+random rotation, held in mid-air while observed) and the camera noise, so every method in a run
+sees the same object in the same pose through the same cloud. Clouds are ray cast from the
+object's mesh at its simulated pose with the Kinect's noise model (the generator `nift make-data`
+uses): `single` from the cell's camera, `fused` from four cameras at the corners of the table
+around the object (the paper's simulated setting), resampled to 1,024 points.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import trimesh
+
+from app.cell import CellConfig
+from app.nift.raycast import scene_of
+from app.perception import resample
+from app.tasks import Task
+from app.training.views import CAMERAS, kinect_cloud
+from hardware.sim.kinect import look_at
+
+SETTINGS = ("teleported", "executed")
+CLOUD_POINTS = 1024
+FUSED_DISTANCE = 1.0  # m from the object's centre
+FUSED_ELEVATION_DEG = 35.0
+
+
+@dataclass(frozen=True)
+class BenchConfig:
+    """One benchmark run: what is compared on which trials."""
+
+    tasks: tuple[str, ...] = ("mug", "bowl", "bottle")
+    poses: tuple[str, ...] = ("upright", "arbitrary")
+    methods: tuple[str, ...] = ("cpd", "bps-ndf", "bps-scf", "bps-nif", "ibs-ndf", "ibs-scf", "ibs-nif")
+    trials: int = 100
+    demos: int = 10
+    camera: str = "single"
+    setting: str = "teleported"
+    seed: int = 0
+    cell: CellConfig = field(default_factory=CellConfig)
+
+    def check(self) -> None:
+        """A one-line error for a setting this benchmark does not know."""
+        if self.camera not in CAMERAS:
+            raise ValueError(f"unknown camera setting {self.camera!r}; choose one of {', '.join(CAMERAS)}")
+        if self.setting not in SETTINGS:
+            raise ValueError(f"unknown setting {self.setting!r}; choose one of {', '.join(SETTINGS)}")
+        if self.trials < 1 or not 1 <= self.demos <= 10:
+            raise ValueError(f"--trials must be >= 1 and --demos 1..10 (got {self.trials}, {self.demos})")
+
+
+@dataclass(frozen=True)
+class Trial:
+    """One object in one pose, seen once, judged for every method."""
+
+    task: str
+    pose: str
+    index: int
+
+    @property
+    def key(self) -> str:
+        return f"{self.task}/{self.pose}/{self.index}"
+
+    def seed(self, run_seed: int) -> list[int]:
+        """The trial's seed sequence: stable under a change of the other trials or the methods."""
+        return [run_seed, sum(map(ord, self.task)), sum(map(ord, self.pose)), self.index]
+
+
+def trials(config: BenchConfig) -> list[Trial]:
+    """Every trial of a run, in a fixed order."""
+    return [Trial(t, p, i) for t in config.tasks for p in config.poses for i in range(config.trials)]
+
+
+def camera_eyes(camera: str, center: np.ndarray, cell: CellConfig) -> list[np.ndarray]:
+    """Eye positions (base frame) of the camera setting looking at `center`."""
+    if camera == "single":
+        return [np.asarray(cell.camera_eye, float)]
+    el = np.radians(FUSED_ELEVATION_DEG)
+    return [center + FUSED_DISTANCE * np.array([np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el)])
+            for az in np.radians(45.0) + np.arange(4) * np.pi / 2]
+
+
+def trial_cloud(mesh: trimesh.Trimesh, T_base_obj: np.ndarray, camera: str, rng: np.random.Generator,
+                cell: CellConfig = CellConfig()) -> np.ndarray:
+    """The object's cloud (1024, 3) in the base frame as the camera setting sees it."""
+    posed = mesh.copy().apply_transform(T_base_obj)
+    center = posed.bounds.mean(axis=0)
+    radius = float(np.linalg.norm(posed.vertices - center, axis=1).max())
+    scene = scene_of(posed)
+    target = np.asarray(cell.camera_target, float) if camera == "single" else center
+    clouds = [kinect_cloud(scene, look_at(eye, target), rng, sphere=(center, radius))
+              for eye in camera_eyes(camera, center, cell)]
+    cloud = np.concatenate(clouds)
+    if len(cloud) < 32:
+        raise ValueError(f"the camera saw only {len(cloud)} points of the object")
+    return resample(cloud, CLOUD_POINTS, int(rng.integers(2**31)))
+
+
+def demo_task(t: Task) -> str:
+    """Which task's demos a (possibly out-of-domain) task imitates."""
+    return t.demos

@@ -1,0 +1,140 @@
+"""Running a benchmark: worker processes, a results file that grows one trial at a time, resume.
+
+`out/run.json` records the run's settings; `out/results.jsonl` gets one line per (trial, method)
+as soon as a trial is done. Starting again with the same settings skips finished trials (a
+half-written last line from an interruption is ignored); other settings in the same directory are
+refused. Demo subsets (--demos N < 10) are copied to `out/demos/<task>/` and their templates built
+there, before the workers start, so that no two workers build the same template.
+"""
+from __future__ import annotations
+
+import json
+import multiprocessing as mp
+import shutil
+from dataclasses import asdict
+from pathlib import Path
+from typing import Callable
+
+from app.bench.protocol import BenchConfig, Trial, trials
+from app.io_utils import write_json
+from app.methods import ORACLE, check_method
+from app.recorder import DEMOS_DIR, task_templates
+from app.tasks import task
+
+FORMAT = "nift-bench/1"
+_worker = None  # the per-process bench (a world, or the sim cell), made by _init_worker
+
+
+def settings(config: BenchConfig) -> dict:
+    """What must match for a resume: everything but the cell's object identity."""
+    d = asdict(config)
+    d["cell"] = repr(config.cell)
+    return {"format": FORMAT, **d}
+
+
+def prepare(config: BenchConfig, out: Path) -> Path:
+    """Check the settings against an earlier run in `out`; build every template; return the demo root."""
+    config.check()
+    for method in config.methods:
+        if method != ORACLE:
+            check_method(method)
+    out.mkdir(parents=True, exist_ok=True)
+    run_file = out / "run.json"
+    if run_file.exists():
+        earlier = json.loads(run_file.read_text())
+        if earlier != json.loads(json.dumps(settings(config))):
+            raise ValueError(f"{out} holds results of a run with other settings; choose another --out")
+    else:
+        write_json(run_file, settings(config))
+    root = DEMOS_DIR
+    if config.demos < 10:
+        root = out / "demos"
+        for name in {task(t).demos for t in config.tasks}:
+            target = root / name
+            target.mkdir(parents=True, exist_ok=True)
+            for path in sorted((DEMOS_DIR / name).glob("demo-*.npz"))[: config.demos]:
+                if not (target / path.name).exists():
+                    shutil.copy2(path, target / path.name)
+    for name in config.tasks:
+        t = task(name)
+        for method in config.methods:
+            if method not in (ORACLE, "cpd"):
+                query, feature = check_method(method).split("-")
+                task_templates(t, root / t.demos, query, feature)
+    return root
+
+
+def read_rows(out: Path) -> list[dict]:
+    """Rows written so far (a truncated last line is dropped)."""
+    path = out / "results.jsonl"
+    if not path.exists():
+        return []
+    rows = []
+    for line in path.read_text().splitlines():
+        try:
+            rows.append(json.loads(line))
+        except json.JSONDecodeError:
+            break  # an interrupted write: that trial runs again
+    return rows
+
+
+def pending(config: BenchConfig, out: Path) -> list[Trial]:
+    """Trials with a row missing for some method."""
+    have: dict[str, set[str]] = {}
+    for row in read_rows(out):
+        have.setdefault(row["trial"], set()).add(row["method"])
+    return [tr for tr in trials(config) if not set(config.methods) <= have.get(tr.key, set())]
+
+
+def _init_worker(config: BenchConfig, demo_root: Path) -> None:
+    global _worker
+    import torch
+
+    from app.bench.trial import ExecutedBench, TeleportedBench
+
+    torch.set_num_threads(1)
+    bench = ExecutedBench if config.setting == "executed" else TeleportedBench
+    _worker = (bench(config.cell), config, demo_root)
+
+
+def _run_trial(trial: Trial) -> list[dict]:
+    bench, config, demo_root = _worker
+    return bench.run(trial, config, demo_root)
+
+
+def run(config: BenchConfig, out: Path, workers: int = 2, progress: Callable[[int, int], None] = lambda d, n: None) -> list[dict]:
+    """Run (or finish) a benchmark into `out`; return every row."""
+    demo_root = prepare(config, out)
+    todo = pending(config, out)
+    _drop_partial_rows(out, {tr.key for tr in todo})
+    total, done = len(trials(config)), len(trials(config)) - len(todo)
+    progress(done, total)
+    if todo:
+        with open(out / "results.jsonl", "a") as sink:
+            if workers <= 1:
+                _init_worker(config, demo_root)
+                results = map(_run_trial, todo)
+            else:
+                pool = mp.get_context("spawn").Pool(workers, _init_worker, (config, demo_root))
+                results = pool.imap_unordered(_run_trial, todo)
+            try:
+                for rows in results:
+                    sink.write("".join(json.dumps(r) + "\n" for r in rows))
+                    sink.flush()
+                    done += 1
+                    progress(done, total)
+            finally:
+                if workers > 1:
+                    pool.terminate()
+    return read_rows(out)
+
+
+def _drop_partial_rows(out: Path, keys: set[str]) -> None:
+    """Rewrite results.jsonl without rows of trials about to run again (and any torn last line)."""
+    path = out / "results.jsonl"
+    if not path.exists():
+        return
+    kept = [r for r in read_rows(out) if r["trial"] not in keys]
+    tmp = path.with_suffix(".tmp")
+    tmp.write_text("".join(json.dumps(r) + "\n" for r in kept))
+    tmp.replace(path)

@@ -1,0 +1,111 @@
+"""One benchmark trial: an object in a pose, seen once, and every method's verdicts on it.
+
+Teleported (the paper's setting): each method's grasp is judged by a free-floating gripper at the
+predicted pose, its place by setting the object at the predicted goal pose, each on a freshly
+spawned copy of the object in the trial's pose. Executed: the whole job runs in the sim cell
+(camera, perception, IK, trajectories, the gripper) for each method.
+"""
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from app.bench.protocol import BenchConfig, Trial, trial_cloud
+from app.cell import CellConfig, SimCell, add_fixtures
+from app.jobs import JobConfig
+from app.judges import judge_grasp, judge_place
+from app.methods import ORACLE
+from app.motion.scene import PlanningScene
+from app.nift.imitate import ImitationConfig
+from app.oracle import teacher_prediction
+from app.predict import predict
+from app.sim_jobs import JobSpec, run_sim_job, spawn_test_object
+from app.spawn import spawn
+from app.tasks import task
+from hardware.sim.world import SimWorld, SimWorldConfig
+
+
+class TeleportedBench:
+    """A physics world with the fixtures, reused for every trial of a worker."""
+
+    def __init__(self, cell: CellConfig) -> None:
+        self.cell = cell
+        self.world = SimWorld(SimWorldConfig())
+        self.world.connect()
+        self.fixtures = add_fixtures(self.world, cell)
+
+    def close(self) -> None:
+        self.world.disconnect()
+
+    def run(self, trial: Trial, config: BenchConfig, demo_root) -> list[dict]:
+        """Rows (one per method) for a trial."""
+        t = task(trial.task)
+        rng = np.random.default_rng(trial.seed(config.seed))
+        obj = spawn_test_object(self.world, t, trial.pose, rng)
+        T_base_obj = self.world.pose(obj.body)
+        self.world.remove(obj.body)
+        cloud = trial_cloud(obj.mesh, T_base_obj, config.camera, rng, self.cell)
+        T_base_fixture = self.cell.fixture_pose(t.fixture)
+        base = {"trial": trial.key, "task": t.name, "pose": trial.pose, "index": trial.index, "instance": obj.seed,
+                "scale": round(obj.scale, 4)}
+        rows = []
+        for method in config.methods:
+            start = time.perf_counter()
+            try:
+                if method == ORACLE:
+                    pred = teacher_prediction(t, obj.mesh, obj.scale, T_base_obj, T_base_fixture)
+                else:
+                    pred = predict(t, cloud, method, T_base_fixture, demo_root / t.demos,
+                                   ImitationConfig(seed=trial.index))
+            except ValueError as exc:
+                rows.append({**base, "method": method, "grasp": False, "place": False, "overall": False,
+                             "why": f"no prediction: {exc}", "seconds": round(time.perf_counter() - start, 2)})
+                continue
+            seconds = time.perf_counter() - start
+            grasp = self._judge(obj, T_base_obj, trial.pose,
+                                lambda o: judge_grasp(self.world, o, pred.T_base_tcp))
+            place = self._judge(obj, T_base_obj, trial.pose,
+                                lambda o: judge_place(self.world, o, pred.motion @ T_base_obj,
+                                                      self.fixtures[t.fixture], t.upright))
+            rows.append({**base, "method": method, "grasp": grasp.success, "place": place.success,
+                         "overall": grasp.success and place.success,
+                         "why": f"grasp: {grasp.reason}; place: {place.reason}", "seconds": round(seconds, 2)})
+        return rows
+
+    def _judge(self, obj, T_base_obj, pose, judge):
+        """Run a judge on a fresh copy of the trial's object in the trial's pose."""
+        copy = spawn(self.world, obj.category, obj.seed, pose, scale=obj.scale, T_world_obj=T_base_obj)
+        try:
+            return judge(copy)
+        finally:
+            self.world.remove(copy.body)
+
+
+class ExecutedBench:
+    """The sim cell with its planning scene, reused for every trial of a worker."""
+
+    def __init__(self, cell: CellConfig) -> None:
+        self.sim = SimCell(cell)
+        self.sim.connect()
+        self.scene = PlanningScene(cell)
+        self.T_base_cam = np.array(self.sim.camera.config.T_base_cam)  # calibration is measured on its own
+
+    def close(self) -> None:
+        self.scene.close()
+        self.sim.disconnect()
+
+    def run(self, trial: Trial, config: BenchConfig, demo_root) -> list[dict]:
+        t = task(trial.task)
+        rows = []
+        for method in config.methods:
+            job = JobConfig(method=method, demos=demo_root / t.demos, imitation=ImitationConfig(seed=trial.index))
+            r = run_sim_job(self.sim, self.scene, self.T_base_cam, JobSpec(t, tuple(trial.seed(config.seed)), trial.pose), job)
+            failed = r.failed_stage or ""
+            grasp = r.success or failed in ("place", "release", "retreat", "verify")  # held through the carry
+            rows.append({"trial": trial.key, "task": t.name, "pose": trial.pose, "index": trial.index,
+                         "instance": r.info["instance"], "scale": r.info["scale"], "method": method, "grasp": grasp,
+                         "place": r.success, "overall": r.success,
+                         "why": r.reason if r.success else f"failed at {failed}: {r.reason}",
+                         "seconds": round(sum(r.seconds.values()), 2)})
+        return rows

@@ -1,0 +1,49 @@
+"""`nift bench-jobs`: executed pick-and-place success, planning and job times per task."""
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from app.commands.cell_options import add_config_argument
+from app.commands.output import print_figures
+
+NAME = "bench-jobs"
+HELP = "run a series of executed jobs per task and report success, planning, trajectory and job times"
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    from app.methods import SIM_METHODS
+
+    p.add_argument("--method", default="nift", choices=SIM_METHODS, help="method (teacher: the oracle)")
+    p.add_argument("--jobs", type=int, default=20, help="jobs per task (default 20)")
+    p.add_argument("--tasks", default="mug,bowl,bottle", help="comma list of tasks")
+    p.add_argument("--pose", default="upright", choices=["upright", "arbitrary"])
+    p.add_argument("--quick", action="store_true", help="two jobs per task (CI size)")
+    p.add_argument("--seed", type=int, default=0, help="first job's seed")
+    p.add_argument("--calibration", type=Path, default=Path("calibration.json"),
+                   help="camera calibration file; if missing, the cell is calibrated first and it is written")
+    p.add_argument("--json", action="store_true", help="print the figures as JSON")
+    add_config_argument(p)
+
+
+def run(args: argparse.Namespace) -> int:
+    from tqdm import tqdm
+
+    from app.bench.jobs import run_jobs_benchmark
+    from app.cell import SimCell
+    from app.commands.capture import ensure_calibration
+    from app.commands.cell_options import cell_config
+    from app.tasks import task
+
+    tasks = tuple(task(t.strip()).name for t in args.tasks.split(",") if t.strip())
+    jobs = 2 if args.quick else args.jobs
+    if jobs < 1:
+        raise ValueError(f"--jobs must be at least 1, got {jobs}")
+    config = cell_config(args)
+    with SimCell(config) as cell:
+        T_base_cam = ensure_calibration(cell, args.calibration)
+    with tqdm(total=jobs * len(tasks), unit="job", desc="bench-jobs") as bar:
+        figures = run_jobs_benchmark(jobs, args.method, args.pose, args.seed, tasks, config, T_base_cam,
+                                     lambda r: bar.update(1))
+    print_figures(figures, args.json)
+    return 0
