@@ -2,26 +2,29 @@
 
 
 def _import_pybullet_quietly() -> None:
-    """Import pybullet with fd 1 closed: its C module prints a build banner to stdout, which would
-    spoil `--json` output. Every later `import pybullet` finds it already loaded."""
+    """Import pybullet with fds 1 and 2 pointed at /dev/null: its C module prints a build banner,
+    which would spoil one-line errors and piped output. Later imports find it loaded."""
+    import ctypes
     import os
     import sys
 
     if "pybullet" in sys.modules:
         return
     sys.stdout.flush()
-    saved, devnull = os.dup(1), os.open(os.devnull, os.O_WRONLY)
+    sys.stderr.flush()
+    saved = [os.dup(1), os.dup(2)]
+    devnull = os.open(os.devnull, os.O_WRONLY)
     os.dup2(devnull, 1)
+    os.dup2(devnull, 2)
     try:
-        import ctypes
-
         import pybullet  # noqa: F401
 
-        ctypes.CDLL(None).fflush(None)  # the banner sits in C's stdio buffer until flushed
+        ctypes.CDLL(None).fflush(None)  # whatever C buffered goes to /dev/null too
     finally:
-        os.dup2(saved, 1)
-        os.close(devnull)
-        os.close(saved)
+        os.dup2(saved[0], 1)
+        os.dup2(saved[1], 2)
+        for fd in (*saved, devnull):
+            os.close(fd)
 
 
 _import_pybullet_quietly()

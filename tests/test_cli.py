@@ -90,3 +90,24 @@ def test_bench_cell_quick_reports_figures():
     figures = json.loads(out.stdout[out.stdout.index("{"):])
     assert figures["real_time_factor_moveJ"] > 1.0  # faster than real time in DIRECT mode
     assert 0 < figures["camera_frame_ms"] < 5000 and 0 < figures["perception_ms"] < 5000
+
+
+@pytest.mark.slow
+def test_run_prints_clean_json_and_writes_key_frames(tmp_path):
+    strip = tmp_path / "job.png"
+    out = nift("run", "--task", "bowl", "--method", "teacher", "--seed", "1", "--json", "--record", str(strip),
+               "--calibration", str(tmp_path / "calibration.json"))
+    record = json.loads(out.stdout)  # nothing but the JSON on stdout (no pybullet banner)
+    assert out.returncode == 0 and record["success"] is True, out.stderr[-500:]
+    assert record["failed_stage"] is None and record["arm"] == "home"
+    assert strip.read_bytes()[:8] == PNG_MAGIC
+    assert (tmp_path / "calibration.json").exists()  # a clean cell calibrates itself first
+
+
+def test_run_refuses_bad_options_in_one_line(tmp_path):
+    out = nift("run", "--task", "mug", "--record", str(tmp_path / "job.mp4"))
+    assert out.returncode == 2 and "PNG" in out.stderr and len(out.stderr.strip().splitlines()) == 1
+    out = nift("run", "--task", "mug", "--jobs", "0")
+    assert out.returncode == 2 and "--jobs" in out.stderr
+    out = nift("bench", "--tasks", "cup", "--out", str(tmp_path / "b"))
+    assert out.returncode == 2 and "unknown task 'cup'" in out.stderr

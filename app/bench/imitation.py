@@ -67,12 +67,12 @@ def place_error(fixture: str, goal_pred: np.ndarray, goal_teacher: np.ndarray) -
 
 
 def run_imitation_benchmark(quick: bool = False, seed: int = 0, method: str = "nift", objects: int = 20,
-                            tasks: tuple[str, ...] = ("mug", "bowl", "bottle")) -> dict:
+                            tasks: tuple[str, ...] = ("mug", "bowl", "bottle"), prune_every: int = 25) -> dict:
     """Per task: median seconds per prediction, iterations, and median grasp / place errors."""
     cell = CellConfig()
-    config = ImitationConfig(seed=seed)
+    config = ImitationConfig(seed=seed, prune_every=prune_every)
     n = 2 if quick else objects
-    figures: dict = {"method": method, "objects_per_task": n}
+    figures: dict = {"method": method, "objects_per_task": n, "prune_every": prune_every}
     for name in tasks:
         t = task(name)
         rng = np.random.default_rng([seed, len(name)])

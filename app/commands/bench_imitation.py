@@ -17,6 +17,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--tasks", default="mug,bowl,bottle", help="comma list of tasks")
     p.add_argument("--quick", action="store_true", help="two objects per task (CI size)")
     p.add_argument("--seed", type=int, default=0, help="objects, poses, scales, initialisations")
+    p.add_argument("--prune-every", type=int, default=25,
+                   help="drop the worse half of the initialisations every N steps (0: the paper's, no pruning)")
     p.add_argument("--json", action="store_true", help="print the figures as JSON")
 
 
@@ -24,6 +26,6 @@ def run(args: argparse.Namespace) -> int:
     from app.bench.imitation import run_imitation_benchmark
 
     tasks = tuple(t.strip() for t in args.tasks.split(",") if t.strip())
-    figures = run_imitation_benchmark(args.quick, args.seed, args.method, args.objects, tasks)
+    figures = run_imitation_benchmark(args.quick, args.seed, args.method, args.objects, tasks, args.prune_every)
     print_figures(figures, args.json, {f"{t}_seconds_per_prediction": "<= 2" for t in tasks})
     return 0

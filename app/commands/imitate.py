@@ -19,6 +19,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--inits", type=int, default=10, help="parallel initialisations (paper: 10)")
     p.add_argument("--iterations", type=int, default=500, help="at most this many Adam steps (paper: 500)")
     p.add_argument("--seed", type=int, default=0, help="initial rotations and translations")
+    p.add_argument("--prune-every", type=int, default=25,
+                   help="drop the worse half of the initialisations every N steps (0: the paper's, no pruning)")
     p.add_argument("--json", action="store_true", help="print the poses and losses as JSON")
 
 
@@ -32,7 +34,7 @@ def run(args: argparse.Namespace) -> int:
     from app.tasks import task
 
     cloud = load_cloud(args.cloud)
-    config = ImitationConfig(inits=args.inits, iterations=args.iterations, seed=args.seed)
+    config = ImitationConfig(inits=args.inits, iterations=args.iterations, seed=args.seed, prune_every=args.prune_every)
     pred = predict(task(args.task), cloud, args.method, directory=args.demos, config=config)
     if args.json:
         print(json.dumps(pred.record(), indent=2))

@@ -1,0 +1,69 @@
+"""The benchmark: judges tell good poses from bad; same seed, same table; an interrupted run resumes."""
+import json
+
+import numpy as np
+import pytest
+
+from app.bench import trial as trial_module
+from app.bench.protocol import BenchConfig
+from app.bench.report import summarise
+from app.bench.runner import read_rows, run
+from app.methods import ORACLE
+from app.predict import Prediction
+from app.se3 import invert, make_pose, rotvec_to_matrix
+
+
+def _summary(out, config):
+    return summarise(read_rows(out), list(config.tasks), list(config.poses), list(config.methods))
+
+
+@pytest.mark.slow
+def test_oracle_scores_high_and_wrong_poses_score_zero(tmp_path, monkeypatch):
+    config = BenchConfig(tasks=("mug", "bowl", "bottle"), poses=("upright", "arbitrary"), methods=(ORACLE,), trials=3)
+    oracle = _summary_after(run(config, tmp_path / "oracle", workers=2), config)
+    for pose in config.poses:
+        for t in config.tasks:
+            assert oracle[pose][ORACLE][t]["overall"] >= 0.95, (pose, t, oracle[pose][ORACLE][t])
+
+    true_teacher = trial_module.teacher_prediction
+
+    def wrong(t, mesh, scale, T_base_obj, T_base_fixture) -> Prediction:
+        """The teacher's poses spoilt: the gripper 10 cm off along its approach axis, the object upside down."""
+        good = true_teacher(t, mesh, scale, T_base_obj, T_base_fixture)
+        upside_down = good.motion @ T_base_obj @ make_pose(rotvec_to_matrix([np.pi, 0.0, 0.0]))
+        motion = upside_down @ invert(T_base_obj)
+        return Prediction("wrong", good.T_base_tcp @ make_pose(t=[0.0, 0.0, -0.10]), invert(motion) @ T_base_fixture,
+                          motion)
+
+    monkeypatch.setattr(trial_module, "teacher_prediction", wrong)
+    config = BenchConfig(tasks=("mug", "bowl", "bottle"), poses=("upright",), methods=(ORACLE,), trials=2)
+    bad = _summary_after(run(config, tmp_path / "wrong", workers=1), config)
+    for t in config.tasks:
+        assert bad["upright"][ORACLE][t]["grasp"] == 0.0 and bad["upright"][ORACLE][t]["place"] == 0.0
+
+
+def _summary_after(rows, config):
+    return summarise(rows, list(config.tasks), list(config.poses), list(config.methods))
+
+
+def test_same_seed_same_table_and_an_interrupted_run_resumes_to_it(tmp_path):
+    config = BenchConfig(tasks=("bowl", "bottle"), poses=("upright",), methods=(ORACLE, "cpd"), trials=1)
+    first = _summary_after(run(config, tmp_path / "a", workers=1), config)
+    # interrupt: the last trial's rows are lost and the line before is torn in half
+    path = tmp_path / "a" / "results.jsonl"
+    lines = path.read_text().splitlines(keepends=True)
+    path.write_text("".join(lines[:1]) + lines[1][: len(lines[1]) // 2])
+    resumed = _summary_after(run(config, tmp_path / "a", workers=1), config)
+    assert resumed == first
+    assert len(read_rows(tmp_path / "a")) == 4
+    again = _summary_after(run(config, tmp_path / "b", workers=1), config)
+    assert again == first
+    rows_a = sorted((r["trial"], r["method"], r["instance"], r["scale"]) for r in read_rows(tmp_path / "a"))
+    rows_b = sorted((r["trial"], r["method"], r["instance"], r["scale"]) for r in read_rows(tmp_path / "b"))
+    assert rows_a == rows_b
+
+
+def test_other_settings_in_the_same_directory_are_refused(tmp_path):
+    (tmp_path / "run.json").write_text(json.dumps({"format": "nift-bench/1", "trials": 7}))
+    with pytest.raises(ValueError, match="other settings"):
+        run(BenchConfig(tasks=("bowl",), poses=("upright",), methods=(ORACLE,), trials=1), tmp_path, workers=1)
