@@ -67,3 +67,28 @@ def test_other_settings_in_the_same_directory_are_refused(tmp_path):
     (tmp_path / "run.json").write_text(json.dumps({"format": "nift-bench/1", "trials": 7}))
     with pytest.raises(ValueError, match="other settings"):
         run(BenchConfig(tasks=("bowl",), poses=("upright",), methods=(ORACLE,), trials=1), tmp_path, workers=1)
+
+
+def test_fused_cameras_see_more_of_the_object_than_the_cells_one():
+    from scipy.spatial import cKDTree
+
+    from app.bench.protocol import trial_cloud
+    from app.objects import generate
+    from app.se3 import make_pose
+
+    mug = generate("mug", 100_000)
+    T = make_pose(t=[0.5, 0.0, 0.0])
+    surface = mug.sample(3000, seed=0) + T[:3, 3]
+    covered = {}
+    for camera in ("single", "fused"):
+        cloud = trial_cloud(mug, T, camera, np.random.default_rng(0))
+        assert cloud.shape == (1024, 3)
+        covered[camera] = float(np.mean(cKDTree(cloud).query(surface)[0] < 0.006))
+    assert covered["fused"] > covered["single"] + 0.2, covered
+
+
+@pytest.mark.slow
+def test_executed_setting_runs_whole_jobs_and_the_oracle_succeeds(tmp_path):
+    config = BenchConfig(tasks=("bowl",), poses=("upright",), methods=(ORACLE,), trials=2, setting="executed")
+    rows = run(config, tmp_path, workers=1)
+    assert len(rows) == 2 and all(r["overall"] and r["grasp"] for r in rows), [r["why"] for r in rows]
