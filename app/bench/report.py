@@ -38,11 +38,17 @@ def markdown(summary: dict, tasks: list[str], title: str) -> str:
         for method, cells in by_method.items():
             row = [f"{c['grasp']:.2f} / {c['place']:.2f} / **{c['overall']:.2f}**" if (c := cells.get(t)) else "-"
                    for t in (*tasks, "mean")]
-            paper = paper_overall(pose, method, "mean" if len(tasks) > 1 else tasks[0])
+            paper = _paper_mean(pose, method, tasks)
             lines.append(f"| {method} | " + " | ".join(row) + f" | {'-' if paper is None else f'{paper:.2f}'} |")
         n = max(c.get("n", 0) for cells in by_method.values() for c in cells.values())
         lines += ["", f"{n} trials per task; G grasp, P place, O overall success.", ""]
     return "\n".join(lines)
+
+
+def _paper_mean(pose: str, method: str, tasks: list[str]) -> float | None:
+    """The paper's overall success averaged over these tasks (None if it did not report one)."""
+    values = [paper_overall(pose, method, t) for t in tasks]
+    return None if any(v is None for v in values) else round(float(np.mean(values)), 2)
 
 
 def chart(summary: dict, path: Path) -> None:
