@@ -145,7 +145,8 @@ def test_execute_trajectory_and_stop(rig):
         arm.executeTrajectory(times[::-1], q)
     # a moving arm brought to rest by stopJ
     for j, qd in zip(robot.arm_joints, [0.8, -0.5, 0.4, 0.0, 0.0, 0.6]):
-        p.resetJointState(robot.body, j, p.getJointState(robot.body, j)[0], qd)
+        p.resetJointState(robot.body, j, p.getJointState(robot.body, j, physicsClientId=robot.client)[0], qd,
+                          physicsClientId=robot.client)
     arm.stopJ(deceleration=4.0)
     world.step(24)
     assert np.abs(arm.getActualQd()).max() < 0.01

@@ -126,7 +126,17 @@ def run(config: BenchConfig, out: Path, workers: int = 2, progress: Callable[[in
             finally:
                 if workers > 1:
                     pool.terminate()
+                else:
+                    _close_worker()
     return read_rows(out)
+
+
+def _close_worker() -> None:
+    """Free the in-process bench (its physics clients) after a single-process run."""
+    global _worker
+    if _worker is not None:
+        _worker[0].close()
+        _worker = None
 
 
 def _drop_partial_rows(out: Path, keys: set[str]) -> None:
