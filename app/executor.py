@@ -22,11 +22,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from app.motion.cartesian import line_length, line_path
+from app.motion.cartesian import line_path
 from app.motion.ik import IKConfig, NoIKSolution, solutions
 from app.motion.scene import PlanningScene
 from app.motion.trajectory import JointTrajectory, concatenate, joint_segment, path_timing
-from app.se3 import make_pose, rotvec_to_matrix
+from app.se3 import line_length, make_pose, rotvec_to_matrix
 from hardware.interfaces import Arm, JointLimits
 from hardware.kinematics import UR5Kinematics
 from hardware.sim.robot import HOME_Q

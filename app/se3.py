@@ -105,3 +105,10 @@ def interpolate_pose(T0: np.ndarray, T1: np.ndarray, s: float) -> np.ndarray:
     T[:3, 3] = (1 - s) * T0[:3, 3] + s * T1[:3, 3]
     T[:3, :3] = Slerp([0.0, 1.0], Rotation.from_matrix([T0[:3, :3], T1[:3, :3]]))(s).as_matrix()
     return T
+
+
+def line_length(T0: np.ndarray, T1: np.ndarray, metres_per_radian: float = 0.1) -> float:
+    """Path-parameter length of a straight TCP move: metres, with rotation counted at
+    `metres_per_radian` as a floor so rotation-only moves get a length too."""
+    distance = max(float(np.linalg.norm(T1[:3, 3] - T0[:3, 3])), 1e-9)
+    return max(distance, metres_per_radian * float(rotation_angle(T0[:3, :3].T @ T1[:3, :3])))

@@ -2,11 +2,11 @@
 import numpy as np
 import pytest
 
-from app.motion.cartesian import line_length, line_path
+from app.motion.cartesian import line_path
 from app.motion.ik import IKConfig, NoIKSolution, solve
 from app.motion.scene import PlanningScene
 from app.motion.trajectory import path_timing, through_waypoints
-from app.se3 import make_pose, rotation_angle, rotvec_to_matrix
+from app.se3 import line_length, make_pose, rotation_angle, rotvec_to_matrix
 from hardware.interfaces import JointLimits
 from hardware.kinematics import UR5Kinematics
 from hardware.sim.arm import JOINT_ACCELERATION_LIMIT, JOINT_JERK_LIMIT

@@ -3,6 +3,7 @@ job wall time and success over a series of jobs per task, with the failures coun
 from __future__ import annotations
 
 from collections import Counter
+from pathlib import Path
 from typing import Callable
 
 import numpy as np
@@ -34,12 +35,15 @@ def summarise(name: str, results: list[JobResult]) -> dict:
 
 def run_jobs_benchmark(jobs: int = 20, method: str = "nift", pose: str = "upright", seed: int = 0,
                        tasks: tuple[str, ...] = ("mug", "bowl", "bottle"), cell_config: CellConfig = CellConfig(),
-                       T_base_cam: np.ndarray | None = None, progress: Callable[[JobResult], None] = lambda r: None) -> dict:
-    """Run `jobs` jobs per task (seeds seed .. seed + jobs - 1) and summarise them."""
+                       calibration: Path | None = None, progress: Callable[[JobResult], None] = lambda r: None) -> dict:
+    """Run `jobs` jobs per task (seeds seed .. seed + jobs - 1) and summarise them; the camera pose
+    comes from the `calibration` file (calibrating first if it is missing), or is the true one."""
+    from app.commands.capture import ensure_calibration
+
     figures: dict = {"method": method, "pose": pose, "jobs_per_task": jobs}
     with SimCell(cell_config) as cell:
+        T_cam = np.array(cell.camera.config.T_base_cam) if calibration is None else ensure_calibration(cell, calibration)
         scene = PlanningScene(cell_config)
-        T_cam = np.array(cell.camera.config.T_base_cam) if T_base_cam is None else T_base_cam
         try:
             for name in tasks:
                 specs = [JobSpec(task(name), seed + i, pose) for i in range(jobs)]

@@ -18,7 +18,6 @@ import trimesh
 from app.cell import CellConfig
 from app.nift.raycast import scene_of
 from app.perception import resample
-from app.tasks import Task
 from app.training.views import CAMERAS, kinect_cloud
 from hardware.sim.kinect import look_at
 
@@ -97,8 +96,3 @@ def trial_cloud(mesh: trimesh.Trimesh, T_base_obj: np.ndarray, camera: str, rng:
     if len(cloud) < 32:
         raise ValueError(f"the camera saw only {len(cloud)} points of the object")
     return resample(cloud, CLOUD_POINTS, int(rng.integers(2**31)))
-
-
-def demo_task(t: Task) -> str:
-    """Which task's demos a (possibly out-of-domain) task imitates."""
-    return t.demos

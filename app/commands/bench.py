@@ -41,6 +41,7 @@ def run(args: argparse.Namespace) -> int:
     from app.bench.protocol import BenchConfig
     from app.bench.report import write_report
     from app.bench.runner import run as run_bench
+    from app.methods import ORACLE, check_method
     from app.spawn import POSES
     from app.tasks import task
 
@@ -51,7 +52,7 @@ def run(args: argparse.Namespace) -> int:
     for pose in poses:
         if pose not in POSES:
             raise ValueError(f"unknown pose setting {pose!r}; choose from {', '.join(POSES)}")
-    methods = tuple("ibs-nif" if m == "nift" else m for m in _names(args.methods))
+    methods = tuple(m if m == ORACLE else check_method(m) for m in _names(args.methods))
     config = BenchConfig(tasks, poses, methods, args.trials, args.demos, args.camera, args.setting, args.seed)
     with tqdm(unit="trial", desc="bench", disable=args.json) as bar:
         def progress(done: int, total: int) -> None:

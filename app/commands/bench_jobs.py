@@ -30,8 +30,6 @@ def run(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
     from app.bench.jobs import run_jobs_benchmark
-    from app.cell import SimCell
-    from app.commands.capture import ensure_calibration
     from app.commands.cell_options import cell_config
     from app.tasks import task
 
@@ -39,11 +37,8 @@ def run(args: argparse.Namespace) -> int:
     jobs = 2 if args.quick else args.jobs
     if jobs < 1:
         raise ValueError(f"--jobs must be at least 1, got {jobs}")
-    config = cell_config(args)
-    with SimCell(config) as cell:
-        T_base_cam = ensure_calibration(cell, args.calibration)
     with tqdm(total=jobs * len(tasks), unit="job", desc="bench-jobs") as bar:
-        figures = run_jobs_benchmark(jobs, args.method, args.pose, args.seed, tasks, config, T_base_cam,
+        figures = run_jobs_benchmark(jobs, args.method, args.pose, args.seed, tasks, cell_config(args), args.calibration,
                                      lambda r: bar.update(1))
     print_figures(figures, args.json)
     return 0

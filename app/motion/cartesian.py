@@ -5,16 +5,11 @@ import numpy as np
 
 from app.motion.ik import NoIKSolution
 from app.motion.scene import PlanningScene
-from app.se3 import interpolate_pose, rotation_angle
+from app.se3 import interpolate_pose, line_length
 from hardware.kinematics import UR5Kinematics
 
 STEP = 0.004  # m (or 0.04 rad / 10) between IK points along the line
 MAX_JOINT_JUMP = 0.08  # rad between neighbouring IK points; more means a branch switch
-
-
-def line_length(T0: np.ndarray, T1: np.ndarray) -> float:
-    """Path parameter length of a TCP line: metres, with 0.1 m per radian of rotation as a floor."""
-    return max(float(np.linalg.norm(T1[:3, 3] - T0[:3, 3])), 0.1 * rotation_angle(T0[:3, :3].T @ T1[:3, :3]), 1e-6)
 
 
 def line_path(kin: UR5Kinematics, T0: np.ndarray, T1: np.ndarray, q0: np.ndarray, scene: PlanningScene | None = None,

@@ -14,7 +14,7 @@ import numpy as np
 import pybullet as p
 
 from app.motion.trajectory import ruckig_profile
-from app.se3 import interpolate_pose, pose_to_ur, rotation_angle, ur_to_pose
+from app.se3 import interpolate_pose, line_length, pose_to_ur, ur_to_pose
 from hardware.interfaces import Arm, JointLimits, ProtectiveStopError
 from hardware.sim.robot import HOME_Q, SimRobot
 
@@ -107,9 +107,7 @@ class SimArm(Arm):
         self._before_motion()
         k = self.robot.kinematics
         T0, T1 = k.fk(self.getActualQ()), ur_to_pose(pose)
-        length = max(np.linalg.norm(T1[:3, 3] - T0[:3, 3]), 1e-9)
-        angle = float(rotation_angle(T0[:3, :3].T @ T1[:3, :3]))
-        s_len = max(length, 0.1 * angle)  # path parameter covers rotation-only moves too
+        s_len = line_length(T0, T1)  # path parameter covers rotation-only moves too
         profile = ruckig_profile(np.zeros(1), np.array([s_len]), np.array([speed]), np.array([acceleration]),
                                  np.array([CARTESIAN_JERK]))
         q_prev = [self.getActualQ()]
