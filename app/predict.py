@@ -21,11 +21,12 @@ import numpy as np
 
 from app.nift.cpd import best_registration
 from app.methods import check_method
+from app.nift.field import load_field
 from app.nift.imitate import ImitationConfig, imitate
+from app.nift.template import FEATURES
 from app.recorder import DEMOS_DIR, task_demos, task_templates
 from app.se3 import invert
 from app.tasks import Task
-
 
 
 @dataclass
@@ -54,8 +55,10 @@ class Prediction:
 
 
 def predict(t: Task, cloud: np.ndarray, method: str = "nift", T_base_fixture: np.ndarray | None = None,
-            directory: Path | None = None, config: ImitationConfig = ImitationConfig()) -> Prediction:
-    """Grasp pose and place motion for a target cloud (N, 3) in the base frame."""
+            directory: Path | None = None, config: ImitationConfig = ImitationConfig(),
+            nif: str | Path | None = None) -> Prediction:
+    """Grasp pose and place motion for a target cloud (N, 3) in the base frame (`nif`: NIF weights for
+    the nif and scf features, default the shipped ones)."""
     key = check_method(method)
     directory = directory or DEMOS_DIR / t.demos
     if T_base_fixture is None:
@@ -65,9 +68,10 @@ def predict(t: Task, cloud: np.ndarray, method: str = "nift", T_base_fixture: np
     if key == "cpd":
         return _predict_cpd(method, t, cloud, T_base_fixture, directory)
     query, feature = key.split("-")
-    templates = task_templates(t, directory, query, feature)
-    grasp = imitate(templates["grasp"], cloud, config)
-    place = imitate(templates["place"], cloud, config)
+    templates = task_templates(t, directory, query, feature, nif=nif)
+    field = load_field(nif) if nif is not None and FEATURES[feature] == "nif" else None
+    grasp = imitate(templates["grasp"], cloud, config, field)
+    place = imitate(templates["place"], cloud, config, field)
     return Prediction(method, grasp.T, place.T, T_base_fixture @ invert(place.T),
                       {"grasp": grasp.losses.round(5).tolist(), "place": place.losses.round(5).tolist()},
                       {"grasp": grasp.iterations, "place": place.iterations},

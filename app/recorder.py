@@ -21,7 +21,7 @@ from app.anchors import anchor_mesh
 from app.cell import SimCell
 from app.demo import Demo, load_demo, save_demo
 from app.judges import judge_grasp, judge_place
-from app.nift.template import Template, build_template, load_template, save_template
+from app.nift.template import FEATURES, Template, build_template, field_id, load_template, save_template
 from app.objects import split
 from app.perception import object_cloud
 from app.spawn import spawn
@@ -96,31 +96,36 @@ def task_demos(out: Path) -> list[Demo]:
     return [load_demo(p) for p in paths]
 
 
-def template_path(out: Path, stage: str, query: str = "ibs", feature: str = "nif") -> Path:
-    return out / f"{stage}-{query}-{feature}.nit.npz"
+def template_path(out: Path, stage: str, query: str = "ibs", feature: str = "nif", nif: str | Path | None = None) -> Path:
+    """Where a task's template lives; templates built with other NIF weights than the shipped ones
+    carry the weights' hash in the name, so several fields' templates sit side by side."""
+    tag = f".{field_id(nif).split(':')[1]}" if nif is not None and FEATURES[feature] == "nif" else ""
+    return out / f"{stage}-{query}-{feature}{tag}.nit.npz"
 
 
 def build_task_templates(t: Task, demos: list[Demo], query: str = "ibs", feature: str = "nif",
-                         n_points: int = 500, seed: int = 0) -> dict[str, Template]:
-    """The grasp and place templates of a task from its demos."""
+                         n_points: int = 500, seed: int = 0, nif: str | Path | None = None) -> dict[str, Template]:
+    """The grasp and place templates of a task from its demos (`nif`: NIF weights, default shipped)."""
     anchors = {"grasp": "gripper", "place": t.fixture}
+    weights = nif if FEATURES[feature] == "nif" else None
     out = {}
     for stage in STAGES:
         frames = [{"cloud": d.cloud, "name": d.name,
                    "T_frame_anchor": d.grasp_anchor() if stage == "grasp" else d.place_anchor()} for d in demos]
         out[stage] = build_template(anchors[stage], anchor_mesh(anchors[stage]), frames, query, feature, n_points,
-                                    seed=seed)
+                                    weights=weights, seed=seed)
     return out
 
 
 def task_templates(t: Task, directory: Path | None = None, query: str = "ibs", feature: str = "nif",
-                   rebuild: bool = False) -> dict[str, Template]:
+                   rebuild: bool = False, nif: str | Path | None = None) -> dict[str, Template]:
     """A task's templates from its directory, built from the demos (and saved) when missing or asked."""
     directory = directory or DEMOS_DIR / t.demos
-    paths = {s: template_path(directory, s, query, feature) for s in STAGES}
+    weights = nif if FEATURES[feature] == "nif" else None
+    paths = {s: template_path(directory, s, query, feature, weights) for s in STAGES}
     if not rebuild and all(p.is_file() for p in paths.values()):
-        return {s: load_template(p) for s, p in paths.items()}
-    templates = build_task_templates(t, task_demos(directory), query, feature)
+        return {s: load_template(p, weights) for s, p in paths.items()}
+    templates = build_task_templates(t, task_demos(directory), query, feature, nif=weights)
     for stage, template in templates.items():
         save_template(template, paths[stage])
     return templates

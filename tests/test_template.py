@@ -65,3 +65,34 @@ def test_template_files_round_trip_and_bad_files_are_refused(tmp_path):
         with pytest.raises(ValueError, match=message):
             load_template(bad)
     assert FORMAT == "nift-nit/1"
+
+
+def test_templates_of_other_nif_weights_sit_beside_the_shipped_ones(tmp_path):
+    """`nift bench --nif W` (Table III): templates built and imitated with W, named by W's hash."""
+    import shutil
+
+    from app.bench.protocol import BenchConfig
+    from app.bench.runner import settings
+    from app.nift.field import FieldConfig, NeuralField, save_field
+    from app.nift.imitate import ImitationConfig
+    from app.predict import predict
+    from app.recorder import DEMOS_DIR, task_demos, task_templates, template_path
+    from app.tasks import task
+
+    small = FieldConfig(scf_order=3, latent=8, encoder_width=8, encoder_blocks=1, decoder_width=16, decoder_blocks=1)
+    weights = save_field(NeuralField(small), tmp_path / "order3.pt")
+    t = task("bottle")
+    demos = tmp_path / t.demos
+    demos.mkdir()
+    for path in sorted((DEMOS_DIR / t.demos).glob("demo-*.npz"))[:2]:
+        shutil.copy2(path, demos / path.name)
+    templates = task_templates(t, demos, "ibs", "nif", nif=weights)
+    assert templates["grasp"].features.shape[1] == small.feature_dim  # not the shipped 449
+    path = template_path(demos, "grasp", "ibs", "nif", weights)
+    assert path.is_file() and path != template_path(demos, "grasp", "ibs", "nif")
+    with pytest.raises(ValueError, match="rebuild it"):
+        load_template(path)  # checked against the shipped NIF: refused
+    cloud = task_demos(demos)[0].cloud
+    pred = predict(t, cloud, "ibs-nif", directory=demos, config=ImitationConfig(inits=2, iterations=3), nif=weights)
+    assert pred.T_base_tcp.shape == (4, 4)
+    assert settings(BenchConfig(nif=str(weights)))["nif"] == field_id(weights)

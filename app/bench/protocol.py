@@ -39,6 +39,7 @@ class BenchConfig:
     camera: str = "single"
     setting: str = "teleported"
     seed: int = 0
+    nif: str | None = None  # NIF weights for the nif and scf rows (None: the shipped field); Table III
     cell: CellConfig = field(default_factory=CellConfig)
 
     def check(self) -> None:
@@ -49,6 +50,8 @@ class BenchConfig:
             raise ValueError(f"unknown setting {self.setting!r}; choose one of {', '.join(SETTINGS)}")
         if self.trials < 1 or not 1 <= self.demos <= 10:
             raise ValueError(f"--trials must be >= 1 and --demos 1..10 (got {self.trials}, {self.demos})")
+        if self.nif is not None and self.setting == "executed":
+            raise ValueError("--nif applies to the teleported setting only (jobs use the shipped field)")
 
 
 @dataclass(frozen=True)

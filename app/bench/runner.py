@@ -18,6 +18,7 @@ from typing import Callable
 from app.bench.protocol import BenchConfig, Trial, trials
 from app.io_utils import write_json
 from app.methods import ORACLE, check_method
+from app.nift.template import field_id
 from app.recorder import DEMOS_DIR, task_templates
 from app.tasks import task
 
@@ -29,6 +30,8 @@ def settings(config: BenchConfig) -> dict:
     """What must match for a resume: everything but the cell's object identity."""
     d = asdict(config)
     d["cell"] = repr(config.cell)
+    if config.nif is not None:
+        d["nif"] = field_id(config.nif)  # the weights' hash: other weights at the same path do not resume
     return {"format": FORMAT, **d}
 
 
@@ -60,7 +63,7 @@ def prepare(config: BenchConfig, out: Path) -> Path:
         for method in config.methods:
             if method not in (ORACLE, "cpd"):
                 query, feature = check_method(method).split("-")
-                task_templates(t, root / t.demos, query, feature)
+                task_templates(t, root / t.demos, query, feature, nif=config.nif)
     return root
 
 

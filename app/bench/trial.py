@@ -57,7 +57,7 @@ class TeleportedBench:
                     pred = teacher_prediction(t, obj.mesh, obj.scale, T_base_obj, T_base_fixture)
                 else:
                     pred = predict(t, cloud, method, T_base_fixture, demo_root / t.demos,
-                                   ImitationConfig(seed=trial.index))
+                                   ImitationConfig(seed=trial.index), config.nif)
             except ValueError as exc:
                 rows.append({**base, "method": method, "grasp": False, "place": False, "overall": False,
                              "why": f"no prediction: {exc}", "seconds": round(time.perf_counter() - start, 2)})

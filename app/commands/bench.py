@@ -23,6 +23,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--setting", default="teleported", choices=["teleported", "executed"],
                    help="teleported: the paper's judges; executed: whole jobs through IK, trajectories and the gripper")
     p.add_argument("--seed", type=int, default=0, help="the run's seed (objects, poses, noise, initialisations)")
+    p.add_argument("--nif", help="NIF weights for the nif and scf rows (default: the shipped field); Table III")
     p.add_argument("--workers", type=int, default=2, help="worker processes (default 2, one per core)")
     p.add_argument("--out", type=Path, default=Path("out/bench"), help="results directory (resumes a run there)")
     p.add_argument("--quick", action="store_true", help="CI size: 2 trials, cpd and ibs-nif, upright only")
@@ -53,7 +54,8 @@ def run(args: argparse.Namespace) -> int:
         if pose not in POSES:
             raise ValueError(f"unknown pose setting {pose!r}; choose from {', '.join(POSES)}")
     methods = tuple(m if m == ORACLE else check_method(m) for m in _names(args.methods))
-    config = BenchConfig(tasks, poses, methods, args.trials, args.demos, args.camera, args.setting, args.seed)
+    config = BenchConfig(tasks, poses, methods, args.trials, args.demos, args.camera, args.setting, args.seed,
+                         args.nif)
     with tqdm(unit="trial", desc="bench", disable=args.json) as bar:
         def progress(done: int, total: int) -> None:
             bar.total = total
@@ -62,6 +64,8 @@ def run(args: argparse.Namespace) -> int:
 
         rows = run_bench(config, args.out, args.workers, progress)
     title = f"{args.setting} setting, {args.camera} camera, {args.demos} demos, seed {args.seed}"
+    if args.nif:
+        title += f", NIF {args.nif}"
     summary = write_report(rows, list(tasks), list(poses), list(methods), args.out, title)
     if args.json:
         print(json.dumps(summary, indent=2))

@@ -22,6 +22,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--epochs", type=int, help="passes over the data (default 10; 1 with --quick)")
     p.add_argument("--minutes", type=float, help="wall-clock budget; stops at a checkpoint when spent")
     p.add_argument("--lr", type=float, default=1e-4, help="Adam learning rate (paper: 1e-4)")
+    p.add_argument("--lr-final", type=float, help="cosine decay of the learning rate to this over the budget")
+    p.add_argument("--init", help="start from these weights (nif, ndf or a path); tensors of another shape "
+                                  "(the head of another --scf-order) start fresh")
     p.add_argument("--batch-size", type=int, default=16)
     p.add_argument("--scf-order", type=int, default=5, help="SCF bands c_0..c_n the NIF predicts")
     p.add_argument("--threads", type=int, help="torch CPU threads (default: all cores)")
@@ -37,7 +40,7 @@ def config_from(args: argparse.Namespace):
 
     field = FieldConfig(target=args.target, scf_order=args.scf_order)
     values = dict(epochs=args.epochs or (1 if args.quick else 10), lr=args.lr, batch_size=args.batch_size,
-                  minutes=args.minutes, seed=args.seed)
+                  minutes=args.minutes, lr_final=args.lr_final, seed=args.seed)
     if args.quick:
         field = FieldConfig(target=args.target, scf_order=args.scf_order, latent=8, encoder_width=8,
                             encoder_blocks=1, decoder_width=16, decoder_blocks=1)
@@ -54,7 +57,7 @@ def run(args: argparse.Namespace) -> int:
         torch.set_num_threads(args.threads)
     command = "nift " + " ".join(shlex.quote(a) for a in sys.argv[1:])
     card = train(config_from(args), args.data, args.out, eval_dir=args.eval_data, weights=args.weights,
-                 resume=args.resume, progress=not args.json, command=command)
+                 resume=args.resume, progress=not args.json, command=command, init=args.init)
     if args.json:
         import json
 

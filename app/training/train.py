@@ -6,6 +6,15 @@ optimiser, RNG, history) and, when the validation loss improved, `OUT/best.pt`; 
 continues from `last.pt`. A wall-clock budget (`minutes`) ends training early at a step
 boundary, checkpointed, so a session's worth of CPU can be spent exactly. At the end the best
 weights are evaluated on held-out test-split data and written with their model card.
+
+`lr_final` adds a cosine decay of the step size over the run's budget (progress p in [0, 1]: the
+larger of the share of epochs and, with a budget, the share of minutes spent):
+
+    lr(p) = lr_final + (lr - lr_final) (1 + cos(pi p)) / 2
+
+`init` starts from existing weights (fine-tuning, or a longer run from the shipped field): every
+tensor whose name and shape match is copied - so a NIF of another SCF order keeps the encoder
+and decoder and gets a fresh head.
 """
 from __future__ import annotations
 
@@ -39,7 +48,28 @@ class TrainConfig:
     val_fraction: float = 0.1
     val_samples: int = 256  # validation after each epoch uses this fixed subset (full set: 10x the time)
     minutes: float | None = None  # wall-clock budget; None = run all epochs
+    lr_final: float | None = None  # cosine decay of lr to this over the budget; None = constant lr
     seed: int = 0
+
+
+def lr_at(cfg: TrainConfig, epoch: float, seconds: float) -> float:
+    """The step size at a point of the run (epoch: passes done; seconds: wall time spent)."""
+    if cfg.lr_final is None:
+        return cfg.lr
+    progress = epoch / cfg.epochs
+    if cfg.minutes:
+        progress = max(progress, seconds / (60 * cfg.minutes))
+    progress = min(max(progress, 0.0), 1.0)
+    return cfg.lr_final + 0.5 * (cfg.lr - cfg.lr_final) * (1 + np.cos(np.pi * progress))
+
+
+def init_from(model: NeuralField, path: str | Path) -> list[str]:
+    """Copy every tensor of a saved field whose name and shape match; return the names left fresh."""
+    source = load_field(path).state_dict()
+    own = model.state_dict()
+    fresh = [k for k, v in own.items() if k not in source or source[k].shape != v.shape]
+    model.load_state_dict({k: source[k] if k not in fresh else v for k, v in own.items()})
+    return fresh
 
 
 def pick_device() -> torch.device:
@@ -67,16 +97,20 @@ def load_checkpoint(path: Path, model: NeuralField, opt: torch.optim.Optimizer) 
 
 
 def run_epoch(model, opt, data: FieldData, idx: np.ndarray, cfg: TrainConfig, rng: np.random.Generator,
-              deadline: float | None, bar: tqdm) -> tuple[float, int, bool]:
+              state: dict, deadline: float | None, bar: tqdm) -> tuple[float, int, bool]:
     """One pass over idx in random batches: (mean loss, steps, finished). The deadline or Ctrl-C
     ends it early at a step boundary (finished = False); the caller then checkpoints and evaluates."""
     model.train()
     order = rng.permutation(idx)
     total, steps = 0.0, 0
+    begun = time.monotonic()
     try:
         for start in range(0, len(order) - cfg.batch_size + 1, cfg.batch_size):
             if deadline is not None and time.monotonic() > deadline:
                 return total / max(steps, 1), steps, False
+            lr = lr_at(cfg, state["epoch"] + start / len(order), state["seconds"] + time.monotonic() - begun)
+            for group in opt.param_groups:
+                group["lr"] = lr
             batch = data.batch(order[start:start + cfg.batch_size], cfg.cloud_points, cfg.query_points,
                                cfg.field.scf_order, rng)
             batch = {k: v.to(model.device) for k, v in batch.items()}
@@ -93,7 +127,8 @@ def run_epoch(model, opt, data: FieldData, idx: np.ndarray, cfg: TrainConfig, rn
 
 
 def train(cfg: TrainConfig, data_dir: str | Path, out: str | Path, eval_dir: str | Path | None = None,
-          weights: str | Path | None = None, resume: bool = False, progress: bool = True, command: str = "") -> dict:
+          weights: str | Path | None = None, resume: bool = False, progress: bool = True, command: str = "",
+          init: str | Path | None = None) -> dict:
     """Train, checkpoint, evaluate and write the final weights + model card; return the card."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
@@ -103,12 +138,14 @@ def train(cfg: TrainConfig, data_dir: str | Path, out: str | Path, eval_dir: str
     train_idx, val_idx = data.split(cfg.val_fraction, cfg.seed)
     val_idx = np.random.default_rng(cfg.seed).permutation(val_idx)[:cfg.val_samples]
     model = NeuralField(cfg.field).to(device)
+    fresh = init_from(model, init) if init is not None and not resume else []
     if cfg.field.target == "scf":
         bands = data.scf[np.unique(data.sample_instance[train_idx]), :, :cfg.field.out_dim].astype(np.float64)
         model.set_target_stats(bands.mean(axis=(0, 1)), bands.std(axis=(0, 1)))
     opt = torch.optim.Adam(model.parameters(), lr=cfg.lr)
     state = {"epoch": 0, "steps": 0, "seconds": 0.0, "best_val": float("inf"), "history": [],
-             "rng": np.random.default_rng(cfg.seed).bit_generator.state}
+             "rng": np.random.default_rng(cfg.seed).bit_generator.state,
+             "init": None if init is None else {"weights": str(init), "fresh": fresh}}
     if resume:
         state = load_checkpoint(out / "last.pt", model, opt)
     rng = np.random.default_rng()
@@ -119,7 +156,7 @@ def train(cfg: TrainConfig, data_dir: str | Path, out: str | Path, eval_dir: str
                disable=not progress, desc=f"train {cfg.field.target}")
     finished = True
     while state["epoch"] < cfg.epochs and finished:
-        loss, steps, finished = run_epoch(model, opt, data, train_idx, cfg, rng, deadline, bar)
+        loss, steps, finished = run_epoch(model, opt, data, train_idx, cfg, rng, state, deadline, bar)
         val = evaluate(model, data, val_idx, data.cloud.shape[1], cfg.query_points) if len(val_idx) else {"loss": loss}
         state["epoch"] += 1 if finished else steps * cfg.batch_size / len(train_idx)
         state["steps"] += steps
@@ -154,7 +191,8 @@ def model_card(cfg: TrainConfig, data: FieldData, state: dict, device: torch.dev
         "data": {"dir": str(data.path), "samples": data.n_samples, "instances": len(data.seed),
                  "config": data.config},
         "training": {"epochs": round(state["epoch"], 3), "steps": state["steps"], "batch_size": cfg.batch_size,
-                     "lr": cfg.lr, "cloud_points": cfg.cloud_points, "query_points": cfg.query_points,
+                     "lr": cfg.lr, "lr_final": cfg.lr_final, "init": state.get("init"),
+                     "cloud_points": cfg.cloud_points, "query_points": cfg.query_points,
                      "val_fraction": cfg.val_fraction, "seed": cfg.seed, "minutes_budget": cfg.minutes,
                      "seconds": round(state["seconds"], 1), "device": device_name(device),
                      "torch": torch.__version__, "threads": torch.get_num_threads()},
