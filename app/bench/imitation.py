@@ -12,7 +12,10 @@ height error and its tilt; on the rack it is the full pose error.
 """
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
+import torch
 
 from app.cell import WORKSPACE, CellConfig
 from app.nift.imitate import ImitationConfig
@@ -67,17 +70,20 @@ def place_error(fixture: str, goal_pred: np.ndarray, goal_teacher: np.ndarray) -
 
 
 def run_imitation_benchmark(quick: bool = False, seed: int = 0, method: str = "nift", objects: int = 20,
-                            tasks: tuple[str, ...] = ("mug", "bowl", "bottle"), prune_every: int = 25) -> dict:
+                            tasks: tuple[str, ...] = ("mug", "bowl", "bottle"),
+                            config: ImitationConfig = ImitationConfig()) -> dict:
     """Per task: median seconds per prediction, iterations, and median grasp / place errors."""
     cell = CellConfig()
-    config = ImitationConfig(seed=seed, prune_every=prune_every)
+    config = replace(config, seed=seed)
     n = 2 if quick else objects
-    figures: dict = {"method": method, "objects_per_task": n, "prune_every": prune_every}
+    figures: dict = {"method": method, "objects_per_task": n, "prune_every": config.prune_every,
+                     "explore_points": config.explore_points, "iterations": config.iterations,
+                     "patience": config.patience, "threads": torch.get_num_threads()}
     for name in tasks:
         t = task(name)
         rng = np.random.default_rng([seed, len(name)])
         seeds = rng.choice(split(t.category, "test"), size=n, replace=False)
-        rows = []
+        rows, per_template = [], []
         for s in seeds:
             mesh, T_base_obj, cloud, scale = target(t.category, int(s), rng, cell)
             pred = predict(t, cloud, method, cell.fixture_pose(t.fixture), config=config)
@@ -85,10 +91,12 @@ def run_imitation_benchmark(quick: bool = False, seed: int = 0, method: str = "n
             goal = cell.fixture_pose(t.fixture) @ teacher_place(t, mesh, scale)
             p = place_error(t.fixture, pred.motion @ T_base_obj, goal)
             rows.append((sum(pred.seconds.values()), *g, *p, *pred.iterations.values()))
+            per_template.extend(pred.seconds.values())
         a = np.array(rows, dtype=float)
         med = np.median(a, axis=0)
         figures.update({
-            f"{name}_seconds_per_prediction": round(float(med[0]), 2),
+            f"{name}_seconds_per_prediction": round(float(med[0]), 2),  # grasp + place (cpd: registration)
+            f"{name}_seconds_per_template": round(float(np.median(per_template)), 2),
             f"{name}_grasp_error_mm": round(1000 * float(med[1]), 1),
             f"{name}_grasp_error_deg": round(float(med[2]), 1),
             f"{name}_place_error_mm": round(1000 * float(med[3]), 1),
