@@ -56,7 +56,7 @@ class ImitationConfig:
     lr_final_ratio: float = 0.05  # cosine decay of the step size to this share (1.0 = constant)
     prune_every: int = 25  # > 0: every so many steps drop the worse half of the inits (0 = off, the paper's)
     keep: int = 2  # pruning keeps at least this many
-    explore_points: int = 128  # while pruning, the loss uses this random subset of the points (0 = all)
+    explore_points: int = 256  # while pruning, the loss uses this random subset of the points (0 = all)
     seed: int = 0
 
 
