@@ -95,4 +95,4 @@ def test_templates_of_other_nif_weights_sit_beside_the_shipped_ones(tmp_path):
     cloud = task_demos(demos)[0].cloud
     pred = predict(t, cloud, "ibs-nif", directory=demos, config=ImitationConfig(inits=2, iterations=3), nif=weights)
     assert pred.T_base_tcp.shape == (4, 4)
-    assert settings(BenchConfig(nif=str(weights)))["nif"] == field_id(weights)
+    assert settings(BenchConfig(nif=str(weights)))["nif_id"] == field_id(weights)

@@ -41,3 +41,7 @@ def paper_overall(pose: str, method: str, column: str) -> float | None:
         if value is not None:
             return value
     return None
+
+# Table III (SCF order n of the NIF), IBS+NIF mean overall success.
+TABLE_III = {"upright": {1: 0.92, 3: 0.95, 5: 0.95, 7: 0.94, 10: 0.93},
+             "arbitrary": {1: 0.54, 3: 0.65, 5: 0.69, 7: 0.66, 10: 0.62}}

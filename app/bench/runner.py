@@ -31,7 +31,7 @@ def settings(config: BenchConfig) -> dict:
     d = asdict(config)
     d["cell"] = repr(config.cell)
     if config.nif is not None:
-        d["nif"] = field_id(config.nif)  # the weights' hash: other weights at the same path do not resume
+        d["nif_id"] = field_id(config.nif)  # the hash: other weights at the same path do not resume
     return {"format": FORMAT, **d}
 
 
