@@ -21,7 +21,7 @@ from app.anchors import anchor_mesh
 from app.cell import SimCell
 from app.demo import Demo, load_demo, save_demo
 from app.judges import judge_grasp, judge_place
-from app.nift.template import FEATURES, Template, build_template, field_id, load_template, save_template
+from app.nift.template import FEATURES, StaleTemplate, Template, build_template, field_id, load_template, save_template
 from app.objects import split
 from app.perception import object_cloud
 from app.spawn import spawn
@@ -119,12 +119,16 @@ def build_task_templates(t: Task, demos: list[Demo], query: str = "ibs", feature
 
 def task_templates(t: Task, directory: Path | None = None, query: str = "ibs", feature: str = "nif",
                    rebuild: bool = False, nif: str | Path | None = None) -> dict[str, Template]:
-    """A task's templates from its directory, built from the demos (and saved) when missing or asked."""
+    """A task's templates from its directory, built from the demos (and saved) when missing, built
+    with other field weights, or asked."""
     directory = directory or DEMOS_DIR / t.demos
     weights = nif if FEATURES[feature] == "nif" else None
     paths = {s: template_path(directory, s, query, feature, weights) for s in STAGES}
     if not rebuild and all(p.is_file() for p in paths.values()):
-        return {s: load_template(p, weights) for s, p in paths.items()}
+        try:
+            return {s: load_template(p, weights) for s, p in paths.items()}
+        except StaleTemplate:  # the weights changed since: the demos are the source, rebuild
+            pass
     templates = build_task_templates(t, task_demos(directory), query, feature, nif=weights)
     for stage, template in templates.items():
         save_template(template, paths[stage])

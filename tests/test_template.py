@@ -96,3 +96,9 @@ def test_templates_of_other_nif_weights_sit_beside_the_shipped_ones(tmp_path):
     pred = predict(t, cloud, "ibs-nif", directory=demos, config=ImitationConfig(inits=2, iterations=3), nif=weights)
     assert pred.T_base_tcp.shape == (4, 4)
     assert settings(BenchConfig(nif=str(weights)))["nif_id"] == field_id(weights)
+    # a template left from other weights (the shipped field was retrained) is rebuilt from the demos
+    import dataclasses
+    shipped = task_templates(t, demos, "ibs", "nif")["grasp"]
+    save_template(dataclasses.replace(shipped, field_id="nif:000000000000"), template_path(demos, "grasp", "ibs", "nif"))
+    assert task_templates(t, demos, "ibs", "nif")["grasp"].field_id == field_id("nif")
+    assert load_template(template_path(demos, "grasp", "ibs", "nif")).field_id == field_id("nif")

@@ -37,6 +37,10 @@ QUERIES = ("ibs", "bps")
 FEATURES = {"nif": "nif", "ndf": "ndf", "scf": "nif"}  # feature kind -> the field it comes from
 
 
+class StaleTemplate(ValueError):
+    """A template built with other field weights than the ones in use: rebuild it from its demos."""
+
+
 @dataclass
 class Template:
     """Query points (anchor frame) with their demo-averaged features."""
@@ -143,5 +147,5 @@ def load_template(path: str | Path, weights: str | Path | None = None) -> Templa
                  header["field"], header["demos"])
     current = field_id(weights or FEATURES[t.feature])
     if current != t.field_id:
-        raise ValueError(f"{path} was built with field {t.field_id}, not with {current}; rebuild it from its demos")
+        raise StaleTemplate(f"{path} was built with field {t.field_id}, not with {current}; rebuild it from its demos")
     return t
