@@ -23,7 +23,7 @@ from app.nift.cpd import best_registration
 from app.methods import check_method
 from app.nift.field import load_field
 from app.nift.imitate import ImitationConfig, imitate
-from app.nift.template import FEATURES
+from app.nift.template import FEATURES, nif_override
 from app.recorder import DEMOS_DIR, task_demos, task_templates
 from app.se3 import invert
 from app.tasks import Task
@@ -69,7 +69,7 @@ def predict(t: Task, cloud: np.ndarray, method: str = "nift", T_base_fixture: np
         return _predict_cpd(method, t, cloud, T_base_fixture, directory)
     query, feature = key.split("-")
     templates = task_templates(t, directory, query, feature, nif=nif)
-    field = load_field(nif) if nif is not None and FEATURES[feature] == "nif" else None
+    field = load_field(nif_override(feature, nif) or FEATURES[feature])  # once for both templates
     grasp = imitate(templates["grasp"], cloud, config, field)
     place = imitate(templates["place"], cloud, config, field)
     return Prediction(method, grasp.T, place.T, T_base_fixture @ invert(place.T),

@@ -21,7 +21,8 @@ from app.anchors import anchor_mesh
 from app.cell import SimCell
 from app.demo import Demo, load_demo, save_demo
 from app.judges import judge_grasp, judge_place
-from app.nift.template import FEATURES, StaleTemplate, Template, build_template, field_id, load_template, save_template
+from app.nift.template import (StaleTemplate, Template, build_template, field_id, load_template, nif_override,
+                               save_template)
 from app.objects import split
 from app.perception import object_cloud
 from app.spawn import spawn
@@ -99,7 +100,8 @@ def task_demos(out: Path) -> list[Demo]:
 def template_path(out: Path, stage: str, query: str = "ibs", feature: str = "nif", nif: str | Path | None = None) -> Path:
     """Where a task's template lives; templates built with other NIF weights than the shipped ones
     carry the weights' hash in the name, so several fields' templates sit side by side."""
-    tag = f".{field_id(nif).split(':')[1]}" if nif is not None and FEATURES[feature] == "nif" else ""
+    nif = nif_override(feature, nif)
+    tag = "" if nif is None else f".{field_id(nif).split(':')[1]}"
     return out / f"{stage}-{query}-{feature}{tag}.nit.npz"
 
 
@@ -107,7 +109,7 @@ def build_task_templates(t: Task, demos: list[Demo], query: str = "ibs", feature
                          n_points: int = 500, seed: int = 0, nif: str | Path | None = None) -> dict[str, Template]:
     """The grasp and place templates of a task from its demos (`nif`: NIF weights, default shipped)."""
     anchors = {"grasp": "gripper", "place": t.fixture}
-    weights = nif if FEATURES[feature] == "nif" else None
+    weights = nif_override(feature, nif)
     out = {}
     for stage in STAGES:
         frames = [{"cloud": d.cloud, "name": d.name,
@@ -122,7 +124,7 @@ def task_templates(t: Task, directory: Path | None = None, query: str = "ibs", f
     """A task's templates from its directory, built from the demos (and saved) when missing, built
     with other field weights, or asked."""
     directory = directory or DEMOS_DIR / t.demos
-    weights = nif if FEATURES[feature] == "nif" else None
+    weights = nif_override(feature, nif)
     paths = {s: template_path(directory, s, query, feature, weights) for s in STAGES}
     if not rebuild and all(p.is_file() for p in paths.values()):
         try:

@@ -37,6 +37,12 @@ QUERIES = ("ibs", "bps")
 FEATURES = {"nif": "nif", "ndf": "ndf", "scf": "nif"}  # feature kind -> the field it comes from
 
 
+def nif_override(feature: str, nif: str | Path | None) -> str | Path | None:
+    """Other NIF weights for a feature kind: `nif` for the kinds the NIF makes ("nif", "scf"), None
+    (the shipped field of the kind) otherwise."""
+    return nif if FEATURES[feature] == "nif" else None
+
+
 class StaleTemplate(ValueError):
     """A template built with other field weights than the ones in use: rebuild it from its demos."""
 
