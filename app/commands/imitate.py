@@ -11,6 +11,7 @@ HELP = "predict the grasp pose and the place motion for an object cloud from a t
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     from app.methods import METHODS
+    from app.nift.imitation_config import ImitationConfig
 
     p.add_argument("--task", required=True, choices=["mug", "bowl", "bottle"], help="which task's demos to imitate")
     p.add_argument("--cloud", type=Path, required=True, help="object cloud in the base frame (.ply .pcd .xyz .npy)")
@@ -19,7 +20,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--inits", type=int, default=10, help="parallel initialisations (paper: 10)")
     p.add_argument("--iterations", type=int, default=500, help="at most this many Adam steps (paper: 500)")
     p.add_argument("--seed", type=int, default=0, help="initial rotations and translations")
-    p.add_argument("--prune-every", type=int, default=25,
+    p.add_argument("--prune-every", type=int, default=ImitationConfig.prune_every,
                    help="drop the worse half of the initialisations every N steps (0: the paper's, no pruning)")
     p.add_argument("--json", action="store_true", help="print the poses and losses as JSON")
 
@@ -28,7 +29,7 @@ def run(args: argparse.Namespace) -> int:
     import numpy as np
 
     from app.cloud_io import load_cloud
-    from app.nift.imitate import ImitationConfig
+    from app.nift.imitation_config import ImitationConfig
     from app.predict import predict
     from app.se3 import pose_to_ur
     from app.tasks import task
