@@ -96,6 +96,8 @@ def test_templates_of_other_nif_weights_sit_beside_the_shipped_ones(tmp_path):
     pred = predict(t, cloud, "ibs-nif", directory=demos, config=ImitationConfig(inits=2, iterations=3), nif=weights)
     assert pred.T_base_tcp.shape == (4, 4)
     assert settings(BenchConfig(nif=str(weights)))["nif_id"] == field_id(weights)
+    with pytest.raises(FileNotFoundError, match="no field weights at"):
+        settings(BenchConfig(nif=str(tmp_path / "missing.pt")))  # `nift bench --nif` with a wrong path
     # a template left from other weights (the shipped field was retrained) is rebuilt from the demos
     import dataclasses
     shipped = task_templates(t, demos, "ibs", "nif")["grasp"]

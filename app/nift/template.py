@@ -63,6 +63,8 @@ class Template:
 def field_id(name_or_path: str | Path) -> str:
     """A field's identity: its name and the first 12 hex digits of its weights' sha256."""
     path = field_path(name_or_path)
+    if not path.is_file():
+        raise FileNotFoundError(f"no field weights at {path}")
     return f"{Path(path).stem}:{hashlib.sha256(path.read_bytes()).hexdigest()[:12]}"
 
 
