@@ -10,18 +10,15 @@ HELP = "predict the grasp pose and the place motion for an object cloud from a t
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
+    from app.commands.imitation_options import add_imitation_arguments
     from app.methods import METHODS
-    from app.nift.imitation_config import ImitationConfig
 
     p.add_argument("--task", required=True, choices=["mug", "bowl", "bottle"], help="which task's demos to imitate")
     p.add_argument("--cloud", type=Path, required=True, help="object cloud in the base frame (.ply .pcd .xyz .npy)")
     p.add_argument("--method", default="nift", choices=METHODS, help="nift (= ibs-nif), a query-feature baseline, or cpd")
     p.add_argument("--demos", type=Path, help="task directory (default demos/<task>)")
-    p.add_argument("--inits", type=int, default=10, help="parallel initialisations (paper: 10)")
-    p.add_argument("--iterations", type=int, default=500, help="at most this many Adam steps (paper: 500)")
     p.add_argument("--seed", type=int, default=0, help="initial rotations and translations")
-    p.add_argument("--prune-every", type=int, default=ImitationConfig.prune_every,
-                   help="drop the worse half of the initialisations every N steps (0: the paper's, no pruning)")
+    add_imitation_arguments(p)
     p.add_argument("--json", action="store_true", help="print the poses and losses as JSON")
 
 
@@ -29,14 +26,13 @@ def run(args: argparse.Namespace) -> int:
     import numpy as np
 
     from app.cloud_io import load_cloud
-    from app.nift.imitation_config import ImitationConfig
+    from app.commands.imitation_options import imitation_config
     from app.predict import predict
     from app.se3 import pose_to_ur
     from app.tasks import task
 
     cloud = load_cloud(args.cloud)
-    config = ImitationConfig(inits=args.inits, iterations=args.iterations, seed=args.seed, prune_every=args.prune_every)
-    pred = predict(task(args.task), cloud, args.method, directory=args.demos, config=config)
+    pred = predict(task(args.task), cloud, args.method, directory=args.demos, config=imitation_config(args))
     if args.json:
         print(json.dumps(pred.record(), indent=2))
         return 0

@@ -39,6 +39,7 @@ import torch
 from app.nift.field import NeuralField, load_field
 from app.nift.imitation_config import ImitationConfig
 from app.nift.template import FEATURES, Template, point_features
+from app.schedule import cosine
 from app.se3 import make_pose, random_rotations
 
 
@@ -69,8 +70,7 @@ def rotation_to_6d(R: torch.Tensor) -> torch.Tensor:
 
 def lr_at(config: ImitationConfig, iteration: int) -> float:
     """Cosine decay from lr to lr * lr_final_ratio over the iteration budget."""
-    lo = config.lr * config.lr_final_ratio
-    return lo + 0.5 * (config.lr - lo) * (1 + np.cos(np.pi * min(iteration / config.iterations, 1.0)))
+    return cosine(config.lr, config.lr * config.lr_final_ratio, iteration / config.iterations)
 
 
 def _subset(opt: torch.optim.Adam, params: list[torch.Tensor], keep: torch.Tensor):

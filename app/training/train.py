@@ -28,6 +28,7 @@ import torch
 from tqdm import tqdm
 
 from app.io_utils import atomic_path
+from app.schedule import cosine
 from app.nift.field import FieldConfig, NeuralField, load_field, save_field
 from app.training.dataset import FieldData
 from app.training.evaluate import evaluate, loss_of
@@ -59,8 +60,7 @@ def lr_at(cfg: TrainConfig, epoch: float, seconds: float) -> float:
     progress = epoch / cfg.epochs
     if cfg.minutes:
         progress = max(progress, seconds / (60 * cfg.minutes))
-    progress = min(max(progress, 0.0), 1.0)
-    return cfg.lr_final + 0.5 * (cfg.lr - cfg.lr_final) * (1 + np.cos(np.pi * progress))
+    return cosine(cfg.lr, cfg.lr_final, progress)
 
 
 def init_from(model: NeuralField, path: str | Path) -> list[str]:

@@ -1,0 +1,27 @@
+"""The optimiser options `nift imitate` and `nift bench-imitation` share, with ImitationConfig's defaults."""
+from __future__ import annotations
+
+import argparse
+
+
+def add_imitation_arguments(p: argparse.ArgumentParser) -> None:
+    """--inits, --iterations, --prune-every, --patience, --explore-points."""
+    from app.nift.imitation_config import ImitationConfig as C
+
+    p.add_argument("--inits", type=int, default=C.inits, help=f"parallel initialisations (paper: 10; default {C.inits})")
+    p.add_argument("--iterations", type=int, default=C.iterations,
+                   help="at most this many Adam steps per template; the step size decays over them (paper: 500)")
+    p.add_argument("--prune-every", type=int, default=C.prune_every,
+                   help="drop the worse half of the initialisations every N steps (0: the paper's, no pruning)")
+    p.add_argument("--patience", type=int, default=C.patience,
+                   help="stop when no initialisation improved for this many steps")
+    p.add_argument("--explore-points", type=int, default=C.explore_points,
+                   help="template points the loss uses while pruning (0: all)")
+
+
+def imitation_config(args: argparse.Namespace):
+    """ImitationConfig from the options above and --seed."""
+    from app.nift.imitation_config import ImitationConfig
+
+    return ImitationConfig(inits=args.inits, iterations=args.iterations, prune_every=args.prune_every,
+                           patience=args.patience, explore_points=args.explore_points, seed=args.seed)
