@@ -63,6 +63,18 @@ def test_same_seed_same_table_and_an_interrupted_run_resumes_to_it(tmp_path):
     assert rows_a == rows_b
 
 
+def test_a_run_out_of_minutes_stops_with_a_balanced_table_and_resumes(tmp_path):
+    from app.bench.protocol import trials
+
+    config = BenchConfig(tasks=("bowl", "bottle"), poses=("upright", "arbitrary"), methods=(ORACLE,), trials=3)
+    order = trials(config)
+    assert {(tr.task, tr.pose) for tr in order[:4]} == {(t, p) for t in config.tasks for p in config.poses}
+    assert [tr.index for tr in order] == sorted(tr.index for tr in order)
+    stopped = run(config, tmp_path, workers=1, minutes=0.0)  # the budget is spent after the first trial
+    assert [r["trial"] for r in stopped] == [order[0].key]
+    assert len(run(config, tmp_path, workers=1)) == len(order)
+
+
 def test_other_settings_in_the_same_directory_are_refused(tmp_path):
     (tmp_path / "run.json").write_text(json.dumps({"format": "nift-bench/1", "trials": 7}))
     with pytest.raises(ValueError, match="other settings"):

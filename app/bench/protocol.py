@@ -72,8 +72,8 @@ class Trial:
 
 
 def trials(config: BenchConfig) -> list[Trial]:
-    """Every trial of a run, in a fixed order."""
-    return [Trial(t, p, i) for t in config.tasks for p in config.poses for i in range(config.trials)]
+    """Every trial of a run, index-major: a run stopped early has about as many trials in every cell."""
+    return [Trial(t, p, i) for i in range(config.trials) for t in config.tasks for p in config.poses]
 
 
 def camera_eyes(camera: str, center: np.ndarray, cell: CellConfig) -> list[np.ndarray]:

@@ -40,7 +40,8 @@ def markdown(summary: dict, tasks: list[str], title: str) -> str:
                    for t in (*tasks, "mean")]
             paper = _paper_mean(pose, method, tasks)
             lines.append(f"| {method} | " + " | ".join(row) + f" | {'-' if paper is None else f'{paper:.2f}'} |")
-        n = max(c.get("n", 0) for cells in by_method.values() for c in cells.values())
+        ns = [c["n"] for cells in by_method.values() for t, c in cells.items() if t != "mean"]
+        n = str(max(ns)) if min(ns) == max(ns) else f"{min(ns)}-{max(ns)}"
         lines += ["", f"{n} trials per task; G grasp, P place, O overall success.", ""]
     return "\n".join(lines)
 

@@ -3,7 +3,8 @@
 `out/run.json` records the run's settings; `out/results.jsonl` gets one line per (trial, method)
 as soon as a trial is done. Starting again with the same settings skips finished trials (a
 half-written last line from an interruption is ignored); other settings in the same directory are
-refused. Demo subsets (--demos N < 10) are copied to `out/demos/<task>/` and their templates built
+refused. Trials run index-major (trial 1 of every task and pose, then trial 2, ...), so a run
+stopped early - by its `minutes` budget or Ctrl-C - already makes a balanced table. Demo subsets (--demos N < 10) are copied to `out/demos/<task>/` and their templates built
 there, before the workers start, so that no two workers build the same template.
 """
 from __future__ import annotations
@@ -11,6 +12,7 @@ from __future__ import annotations
 import json
 import multiprocessing as mp
 import shutil
+import time
 from dataclasses import asdict
 from pathlib import Path
 from typing import Callable
@@ -105,8 +107,11 @@ def _run_trial(trial: Trial) -> list[dict]:
     return bench.run(trial, config, demo_root)
 
 
-def run(config: BenchConfig, out: Path, workers: int = 2, progress: Callable[[int, int], None] = lambda d, n: None) -> list[dict]:
-    """Run (or finish) a benchmark into `out`; return every row."""
+def run(config: BenchConfig, out: Path, workers: int = 2, progress: Callable[[int, int], None] = lambda d, n: None,
+        minutes: float | None = None) -> list[dict]:
+    """Run (or finish) a benchmark into `out`; return every row. With `minutes`, stop after that wall time
+    (trials in flight are dropped; running again resumes)."""
+    deadline = None if minutes is None else time.monotonic() + 60 * minutes
     demo_root = prepare(config, out)
     todo = pending(config, out)
     _drop_partial_rows(out, {tr.key for tr in todo})
@@ -126,6 +131,8 @@ def run(config: BenchConfig, out: Path, workers: int = 2, progress: Callable[[in
                     sink.flush()
                     done += 1
                     progress(done, total)
+                    if deadline is not None and time.monotonic() > deadline:
+                        break
             finally:
                 if workers > 1:
                     pool.terminate()

@@ -25,6 +25,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--seed", type=int, default=0, help="the run's seed (objects, poses, noise, initialisations)")
     p.add_argument("--nif", help="NIF weights for the nif and scf rows (default: the shipped field); Table III")
     p.add_argument("--workers", type=int, default=2, help="worker processes (default 2, one per core)")
+    p.add_argument("--minutes", type=float,
+                   help="stop after this wall time and write the table of the trials done (the same command resumes)")
     p.add_argument("--out", type=Path, default=Path("out/bench"), help="results directory (resumes a run there)")
     p.add_argument("--quick", action="store_true", help="CI size: 2 trials, cpd and ibs-nif, upright only")
     p.add_argument("--json", action="store_true", help="print the summary as JSON")
@@ -62,7 +64,7 @@ def run(args: argparse.Namespace) -> int:
             bar.n = done
             bar.refresh()
 
-        rows = run_bench(config, args.out, args.workers, progress)
+        rows = run_bench(config, args.out, args.workers, progress, args.minutes)
     title = f"{args.setting} setting, {args.camera} camera, {args.demos} demos, seed {args.seed}"
     if args.nif:
         title += f", NIF {args.nif}"
@@ -71,6 +73,10 @@ def run(args: argparse.Namespace) -> int:
         print(json.dumps(summary, indent=2))
     else:
         print((args.out / "table.md").read_text())
+        done = len({r["trial"] for r in rows})
+        if done < len(tasks) * len(poses) * args.trials:
+            print(f"stopped after {args.minutes} minutes: {done} of {len(tasks) * len(poses) * args.trials} trials; "
+                  "the same command resumes")
         print(f"written: {args.out / 'table.md'}, {args.out / 'summary.json'}, {args.out / 'chart.png'}, "
               f"{args.out / 'results.jsonl'}")
     return 0
