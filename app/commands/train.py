@@ -43,8 +43,8 @@ def config_from(args: argparse.Namespace):
                   minutes=args.minutes, lr_final=args.lr_final, seed=args.seed)
     if args.quick:
         field = FieldConfig(target=args.target, scf_order=args.scf_order, latent=8, encoder_width=8,
-                            encoder_blocks=1, decoder_width=16, decoder_blocks=1)
-        values.update(batch_size=2, cloud_points=128, query_points=64)
+                            encoder_blocks=1, decoder_width=16, decoder_blocks=1, cloud_points=128)
+        values.update(batch_size=2, query_points=64)
     return TrainConfig(field=field, **values)
 
 

@@ -44,7 +44,6 @@ class TrainConfig:
     epochs: int = 10
     batch_size: int = 16
     lr: float = 1e-4
-    cloud_points: int = 512  # random subset of each 1,024-point cloud per step (augmentation, 2x faster)
     query_points: int = 500
     val_fraction: float = 0.1
     val_samples: int = 256  # validation after each epoch uses this fixed subset (full set: 10x the time)
@@ -89,7 +88,7 @@ def load_checkpoint(path: Path, model: NeuralField, opt: torch.optim.Optimizer) 
     if not path.is_file():
         raise FileNotFoundError(f"no checkpoint to resume at {path}")
     blob = torch.load(path, map_location=model.device, weights_only=False)
-    if blob["config"] != asdict(model.config):
+    if asdict(FieldConfig(**blob["config"])) != asdict(model.config):  # keys added since take their defaults
         raise ValueError(f"{path} was trained with a different architecture; start a new --out")
     model.load_state_dict(blob["model"])
     opt.load_state_dict(blob["optimizer"])
@@ -111,7 +110,7 @@ def run_epoch(model, opt, data: FieldData, idx: np.ndarray, cfg: TrainConfig, rn
             lr = lr_at(cfg, state["epoch"] + start / len(order), state["seconds"] + time.monotonic() - begun)
             for group in opt.param_groups:
                 group["lr"] = lr
-            batch = data.batch(order[start:start + cfg.batch_size], cfg.cloud_points, cfg.query_points,
+            batch = data.batch(order[start:start + cfg.batch_size], cfg.field.cloud_points, cfg.query_points,
                                cfg.field.scf_order, rng)
             batch = {k: v.to(model.device) for k, v in batch.items()}
             loss = loss_of(model, batch)
@@ -192,7 +191,7 @@ def model_card(cfg: TrainConfig, data: FieldData, state: dict, device: torch.dev
                  "config": data.config},
         "training": {"epochs": round(state["epoch"], 3), "steps": state["steps"], "batch_size": cfg.batch_size,
                      "lr": cfg.lr, "lr_final": cfg.lr_final, "init": state.get("init"),
-                     "cloud_points": cfg.cloud_points, "query_points": cfg.query_points,
+                     "cloud_points": cfg.field.cloud_points, "query_points": cfg.query_points,
                      "val_fraction": cfg.val_fraction, "seed": cfg.seed, "minutes_budget": cfg.minutes,
                      "seconds": round(state["seconds"], 1), "device": device_name(device),
                      "torch": torch.__version__, "threads": torch.get_num_threads()},
