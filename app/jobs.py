@@ -38,6 +38,8 @@ class JobConfig:
 
     method: str = "nift"
     grasp_force: float = 40.0  # N
+    release_clearance: float = 0.02  # m the fingers open beyond the held width to let go: opening fully
+    # inside a bowl swept the far finger into its wall and dragged it off the shelf on the retreat
     demos: Path | None = None  # task directory (default demos/<task>)
     perception: PerceptionConfig = PerceptionConfig()
     imitation: ImitationConfig = ImitationConfig()
@@ -153,7 +155,7 @@ def _run(t, arm, gripper, camera, T_base_cam, T_base_fixture, scene, config, hoo
     with _stage(result, "place", hooks):
         execute(arm, plan.segment("place"), tolerance)
     with _stage(result, "release", hooks):
-        gripper.open()
+        gripper.open(width=min(gripper.stroke, gripper.width + config.release_clearance))
     with _stage(result, "retreat", hooks):
         for name in ("retreat", "clear", "home"):
             execute(arm, plan.segment(name), tolerance)

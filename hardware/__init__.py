@@ -3,12 +3,15 @@
 
 def _import_pybullet_quietly() -> None:
     """Import pybullet with fds 1 and 2 pointed at /dev/null: its C module prints a build banner,
-    which would spoil one-line errors and piped output. Later imports find it loaded."""
+    which would spoil one-line errors and piped output. Later imports find it loaded. Without
+    pybullet installed (a GPU box that only trains fields) nothing happens: the simulated devices
+    then fail on their own import."""
     import ctypes
+    import importlib.util
     import os
     import sys
 
-    if "pybullet" in sys.modules:
+    if "pybullet" in sys.modules or importlib.util.find_spec("pybullet") is None:
         return
     sys.stdout.flush()
     sys.stderr.flush()

@@ -191,8 +191,8 @@ class Gripper(Device):
         """Maximum grip force, newtons."""
 
     @abstractmethod
-    def open(self, speed: float = 0.1) -> None:
-        """Open fully (blocking)."""
+    def open(self, speed: float = 0.1, width: float | None = None) -> None:
+        """Open fully, or to `width` metres between the pads (blocking)."""
 
     @abstractmethod
     def close(self, force: float = 40.0, speed: float = 0.05) -> bool:

@@ -99,10 +99,14 @@ def test_gripper_closes_on_nothing_and_opens(rig):
     assert np.isclose(gripper.width, gripper.stroke, atol=1e-3)
     assert gripper.close(force=30.0) is False and not gripper.object_detected
     assert gripper.width < 0.002
+    gripper.open(width=0.03)  # a partial opening, as jobs let go of an object
+    assert np.isclose(gripper.width, 0.03, atol=1e-3)
     gripper.open()
     assert np.isclose(gripper.width, gripper.stroke, atol=1e-3)
     with pytest.raises(ValueError, match="grip force"):
         gripper.close(force=500.0)
+    with pytest.raises(ValueError, match="gripper opening"):
+        gripper.open(width=0.2)
 
 
 def test_tcp_pose_matches_ur_convention(rig):

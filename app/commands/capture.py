@@ -14,7 +14,7 @@ HELP = "capture a single-view object cloud (PLY) and the colour image (PNG) in t
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    from app.objects import CATEGORIES
+    from app.categories import CATEGORIES
 
     p.add_argument("--out", type=Path, default=Path("cloud.ply"), help="object cloud, PLY, base frame")
     p.add_argument("--image", type=Path, default=Path("rgb.png"), help="colour image, PNG")

@@ -12,7 +12,7 @@ HELP = "render a contact sheet of procedural object instances; optionally export
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    from app.objects import CATEGORIES
+    from app.categories import CATEGORIES
 
     p.add_argument("--category", default="mug", choices=CATEGORIES, help="object category (default: mug)")
     p.add_argument("--count", type=int, default=16, help="number of instances (default: 16)")

@@ -19,7 +19,6 @@ the same seed gives the same files.
 """
 from __future__ import annotations
 
-import json
 import time
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import asdict, dataclass
@@ -35,9 +34,8 @@ from app.nift.raycast import scene_of
 from app.nift.scf import compute_scf
 from app.objects import IN_DOMAIN, check_category, generate, split
 from app.se3 import random_rotations
+from app.training.manifest import FORMAT, read_manifest
 from app.training.views import CAMERAS, observe
-
-FORMAT = "nift-data/1"
 
 
 @dataclass(frozen=True)
@@ -93,7 +91,8 @@ def query_points(mesh, cfg: DataConfig, rng: np.random.Generator) -> np.ndarray:
     box = rng.uniform(center - half, center + half, size=(cfg.queries - n_near, 3))
     surface = mesh.sample(n_near, seed=int(rng.integers(2**31))) if n_near else np.zeros((0, 3))
     near = surface + rng.normal(scale=cfg.surface_sigma, size=surface.shape)
-    return np.concatenate([box, near]).astype(np.float32)
+    # stored as float16 (steps of 0.06 mm at 0.1 m): round first, so labels belong to the stored points
+    return np.concatenate([box, near]).astype(np.float16).astype(np.float32)
 
 
 def make_instance(category: str, seed: int, cfg: DataConfig, rng: np.random.Generator) -> dict[str, np.ndarray]:
@@ -112,7 +111,7 @@ def make_instance(category: str, seed: int, cfg: DataConfig, rng: np.random.Gene
         scaled = scene_of(mesh.copy().apply_scale(s))
         cloud = observe(scaled, cfg.camera, R, s * center, s * radius, cfg.points, rng)
         clouds.append(cloud @ R.T)
-    return {"queries": q, "scf": scf.astype(np.float16), "occ": occ, "rotation": rotations.astype(np.float32),
+    return {"queries": q.astype(np.float16), "scf": scf.astype(np.float16), "occ": occ, "rotation": rotations.astype(np.float32),
             "scale": scales.astype(np.float32), "cloud": np.stack(clouds).astype(np.float16)}
 
 
@@ -145,20 +144,6 @@ def config_to_json(cfg: DataConfig) -> dict:
     d = asdict(cfg)
     d["categories"], d["scale"] = list(cfg.categories), list(cfg.scale)
     return d
-
-
-def read_manifest(out: Path) -> dict | None:
-    """The manifest of a data directory, or None if there is none yet."""
-    path = out / "manifest.json"
-    if not path.is_file():
-        return None
-    try:
-        manifest = json.loads(path.read_text())
-    except json.JSONDecodeError as exc:
-        raise ValueError(f"{path} is not valid JSON ({exc.msg})") from None
-    if manifest.get("format") != FORMAT:
-        raise ValueError(f"{path}: expected format {FORMAT!r}, found {manifest.get('format')!r}")
-    return manifest
 
 
 @dataclass

@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from app.training.data import read_manifest
+from app.training.manifest import read_manifest
 
 ARRAYS = ("category", "seed", "queries", "scf", "occ", "sample_instance", "rotation", "scale", "cloud")
 
@@ -37,6 +37,7 @@ class FieldData:
         for k, v in parts.items():
             setattr(self, k, np.concatenate(v))
         self.cloud = self.cloud.astype(np.float32)
+        self.queries = self.queries.astype(np.float32)  # float16 on disk since data made after 2026-11-26
 
     @property
     def n_samples(self) -> int:

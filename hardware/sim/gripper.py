@@ -53,10 +53,12 @@ class SimGripper(Gripper):
         self.require_connected()
         return self._detected
 
-    def open(self, speed: float = 0.1) -> None:
+    def open(self, speed: float = 0.1, width: float | None = None) -> None:
         self.require_connected()
+        if width is not None and not 0.0 < width <= self.stroke:
+            raise ValueError(f"gripper opening must be in (0, {self.stroke}] m, got {width}")
         self._detected = False
-        self._drive(self.stroke / 2, self.max_force, speed)
+        self._drive((self.stroke if width is None else width) / 2, self.max_force, speed)
 
     def close(self, force: float = 40.0, speed: float = 0.05) -> bool:
         self.require_connected()
