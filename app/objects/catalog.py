@@ -8,7 +8,7 @@ from typing import Callable
 import numpy as np
 import trimesh
 
-from app.categories import CATEGORIES, IN_DOMAIN
+from app.categories import CATEGORIES, IN_DOMAIN  # noqa: F401 (IN_DOMAIN: re-exported by app.objects)
 from app.objects import bottle, bowl, mug, vase
 from app.objects.semantics import Semantics
 
