@@ -1,5 +1,6 @@
 """The benchmark: judges tell good poses from bad; same seed, same table; an interrupted run resumes."""
 import json
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -72,7 +73,13 @@ def test_a_run_out_of_minutes_stops_with_a_balanced_table_and_resumes(tmp_path):
     assert [tr.index for tr in order] == sorted(tr.index for tr in order)
     stopped = run(config, tmp_path, workers=1, minutes=0.0)  # the budget is spent after the first trial
     assert [r["trial"] for r in stopped] == [order[0].key]
-    assert len(run(config, tmp_path, workers=1)) == len(order)
+    done = run(config, tmp_path, workers=1)
+    assert len(done) == len(order)
+    # asking for more trials extends the run: only the new indices run, the rows done stay as they were
+    more = run(replace(config, trials=4), tmp_path, workers=1)
+    assert len(more) == len(order) + 4 and more[:len(done)] == done
+    with pytest.raises(ValueError, match="at least that many"):
+        run(config, tmp_path, workers=1)
 
 
 def test_other_settings_in_the_same_directory_are_refused(tmp_path):

@@ -45,12 +45,16 @@ def prepare(config: BenchConfig, out: Path) -> Path:
             check_method(method)
     out.mkdir(parents=True, exist_ok=True)
     run_file = out / "run.json"
+    wanted = json.loads(json.dumps(settings(config)))
     if run_file.exists():
         earlier = json.loads(run_file.read_text())
-        if earlier != json.loads(json.dumps(settings(config))):
+        if {**earlier, "trials": None} != {**wanted, "trials": None}:
             raise ValueError(f"{out} holds results of a run with other settings; choose another --out")
-    else:
-        write_json(run_file, settings(config))
+        if config.trials < earlier["trials"]:
+            raise ValueError(f"{out} holds a run of {earlier['trials']} trials per task and pose; "
+                             f"ask for at least that many or choose another --out")
+    # more trials than before extend the run: a trial's seed depends on its index alone (protocol.py)
+    write_json(run_file, wanted)
     root = DEMOS_DIR
     if config.demos < 10:
         root = out / "demos"
