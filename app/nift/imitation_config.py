@@ -10,8 +10,8 @@ class ImitationConfig:
     """Optimiser settings (the paper's: 10 inits, Adam lr 1e-2, at most 500 iterations). We prune
     by default - the paper does not: `nift bench-imitation` measured 4-6x less time at the same
     pose errors (README); `prune_every=0` is the paper's schedule. 20 inits, not 10: the sharper
-    GPU-trained NIF has more local minima, and pruning leaves 20 inits still ~4x cheaper than the
-    paper's 10 (README, "Imitation")."""
+    GPU-trained NIF has more local minima, and pruning leaves 20 inits still ~3.5x cheaper than
+    the paper's 10 (README, "Imitation")."""
 
     inits: int = 20
     iterations: int = 500

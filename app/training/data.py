@@ -111,8 +111,9 @@ def make_instance(category: str, seed: int, cfg: DataConfig, rng: np.random.Gene
         scaled = scene_of(mesh.copy().apply_scale(s))
         cloud = observe(scaled, cfg.camera, R, s * center, s * radius, cfg.points, rng)
         clouds.append(cloud @ R.T)
-    return {"queries": q.astype(np.float16), "scf": scf.astype(np.float16), "occ": occ, "rotation": rotations.astype(np.float32),
-            "scale": scales.astype(np.float32), "cloud": np.stack(clouds).astype(np.float16)}
+    return {"queries": q.astype(np.float16), "scf": scf.astype(np.float16), "occ": occ,
+            "rotation": rotations.astype(np.float32), "scale": scales.astype(np.float32),
+            "cloud": np.stack(clouds).astype(np.float16)}
 
 
 def shard_name(index: int) -> str:
