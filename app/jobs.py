@@ -41,6 +41,7 @@ class JobConfig:
     release_clearance: float = 0.02  # m the fingers open beyond the held width to let go: opening fully
     # inside a bowl swept the far finger into its wall and dragged it off the shelf on the retreat
     demos: Path | None = None  # task directory (default demos/<task>)
+    center_grasp: bool = True  # centre the predicted grasp between the fingers (app.grasp_centering)
     perception: PerceptionConfig = PerceptionConfig()
     imitation: ImitationConfig = ImitationConfig()
     executor: ExecutorConfig = ExecutorConfig()
@@ -110,7 +111,8 @@ def run_job(t: Task, arm: Arm, gripper: Gripper, camera: DepthCamera, T_base_cam
     result = JobResult(t.name, config.method)
     if predictor is None:
         def predictor(cloud: np.ndarray) -> Prediction:
-            return predict(t, cloud, config.method, T_base_fixture, config.demos, config.imitation)
+            return predict(t, cloud, config.method, T_base_fixture, config.demos, config.imitation,
+                           center=config.center_grasp)
     try:
         _run(t, arm, gripper, camera, T_base_cam, T_base_fixture, scene, config, hooks, predictor, result)
         result.arm = "home"

@@ -10,6 +10,9 @@ imitation, Eq. 5), "nift" = "ibs-nif", and "cpd" (demo registration). Every meth
   where it is to its place on the real fixture. The object's goal pose is motion @ T_base_obj
   (when it is known, as in simulation), and with a rigid grasp the gripper's place pose is
   motion @ T_base_tcp.
+
+The grasp is then centred on the cloud points between the fingers (`app.grasp_centering`, our
+addition, on by default, for every method alike).
 """
 from __future__ import annotations
 
@@ -19,6 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
+from app.grasp_centering import center_grasp
 from app.nift.cpd import best_registration
 from app.methods import check_method
 from app.nift.field import load_field
@@ -56,9 +60,19 @@ class Prediction:
 
 def predict(t: Task, cloud: np.ndarray, method: str = "nift", T_base_fixture: np.ndarray | None = None,
             directory: Path | None = None, config: ImitationConfig = ImitationConfig(),
-            nif: str | Path | None = None) -> Prediction:
+            nif: str | Path | None = None, center: bool = True) -> Prediction:
     """Grasp pose and place motion for a target cloud (N, 3) in the base frame (`nif`: NIF weights for
-    the nif and scf features, default the shipped ones)."""
+    the nif and scf features, default the shipped ones; `center`: centre the grasp on the points
+    between the fingers, `app.grasp_centering`)."""
+    pred = _predict(t, cloud, method, T_base_fixture, directory, config, nif)
+    if center:
+        pred.T_base_tcp = center_grasp(pred.T_base_tcp, cloud)
+    return pred
+
+
+def _predict(t: Task, cloud: np.ndarray, method: str, T_base_fixture: np.ndarray | None, directory: Path | None,
+             config: ImitationConfig, nif: str | Path | None) -> Prediction:
+    """`predict` before the grasp is centred."""
     key = check_method(method)
     directory = directory or DEMOS_DIR / t.demos
     if T_base_fixture is None:

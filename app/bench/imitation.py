@@ -86,7 +86,7 @@ def run_imitation_benchmark(quick: bool = False, seed: int = 0, method: str = "n
         rows, per_template = [], []
         for s in seeds:
             mesh, T_base_obj, cloud, scale = target(t.category, int(s), rng, cell)
-            pred = predict(t, cloud, method, cell.fixture_pose(t.fixture), config=config)
+            pred = predict(t, cloud, method, cell.fixture_pose(t.fixture), config=config, center=False)
             g = grasp_error(t.category, T_base_obj, pred.T_base_tcp, T_base_obj @ teacher_grasp(mesh))
             goal = cell.fixture_pose(t.fixture) @ teacher_place(t, mesh, scale)
             p = place_error(t.fixture, pred.motion @ T_base_obj, goal)

@@ -40,6 +40,7 @@ class BenchConfig:
     setting: str = "teleported"
     seed: int = 0
     nif: str | None = None  # NIF weights for the nif and scf rows (None: the shipped field); Table III
+    center_grasp: bool = True  # centre every method's grasp between the fingers (app.grasp_centering)
     cell: CellConfig = field(default_factory=CellConfig)
 
     def check(self) -> None:

@@ -57,7 +57,7 @@ class TeleportedBench:
                     pred = teacher_prediction(t, obj.mesh, obj.scale, T_base_obj, T_base_fixture)
                 else:
                     pred = predict(t, cloud, method, T_base_fixture, demo_root / t.demos,
-                                   ImitationConfig(seed=trial.index), config.nif)
+                                   ImitationConfig(seed=trial.index), config.nif, config.center_grasp)
             except ValueError as exc:
                 rows.append({**base, "method": method, "grasp": False, "place": False, "overall": False,
                              "why": f"no prediction: {exc}", "seconds": round(time.perf_counter() - start, 2)})
@@ -99,7 +99,8 @@ class ExecutedBench:
         t = task(trial.task)
         rows = []
         for method in config.methods:
-            job = JobConfig(method=method, demos=demo_root / t.demos, imitation=ImitationConfig(seed=trial.index))
+            job = JobConfig(method=method, demos=demo_root / t.demos, imitation=ImitationConfig(seed=trial.index),
+                            center_grasp=config.center_grasp)
             r = run_sim_job(self.sim, self.scene, self.T_base_cam, JobSpec(t, tuple(trial.seed(config.seed)), trial.pose), job)
             failed = r.failed_stage or ""
             grasp = r.success or failed in ("place", "release", "retreat", "verify")  # held through the carry

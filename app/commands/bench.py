@@ -24,6 +24,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="teleported: the paper's judges; executed: whole jobs through IK, trajectories and the gripper")
     p.add_argument("--seed", type=int, default=0, help="the run's seed (objects, poses, noise, initialisations)")
     p.add_argument("--nif", help="NIF weights for the nif and scf rows (default: the shipped field); Table III")
+    p.add_argument("--no-center-grasp", dest="center_grasp", action="store_false",
+                   help="judge the methods' grasps as predicted, not centred between the fingers (README)")
     p.add_argument("--workers", type=int, default=2, help="worker processes (default 2, one per core)")
     p.add_argument("--minutes", type=float,
                    help="stop after this wall time and write the table of the trials done (the same command resumes)")
@@ -57,7 +59,7 @@ def run(args: argparse.Namespace) -> int:
             raise ValueError(f"unknown pose setting {pose!r}; choose from {', '.join(POSES)}")
     methods = tuple(m if m == ORACLE else check_method(m) for m in _names(args.methods))
     config = BenchConfig(tasks, poses, methods, args.trials, args.demos, args.camera, args.setting, args.seed,
-                         args.nif)
+                         args.nif, center_grasp=args.center_grasp)
     with tqdm(unit="trial", desc="bench", disable=args.json) as bar:
         def progress(done: int, total: int) -> None:
             bar.total = total

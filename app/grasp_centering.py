@@ -1,0 +1,45 @@
+"""Centre a predicted grasp on what lies between the fingers, as a self-centring gripper would.
+
+A parallel gripper whose fingers close on a free object ends up centred on it: the first finger
+to touch pushes until the other touches. The benchmark's teleported judge (NDF's protocol) holds
+the object while the fingers close, and our fingers - like a Panda's or a Robotiq's - cannot pass
+the centre line, so there both fingers touch only if the TCP lies inside the gripped material:
+within half a bowl's wall thickness (2-4 mm, measured: `tests/test_grasp_centering.py` and README).
+This step does in software what the closing would do on a real cell - and so does not push the
+object there either: with x along the finger width, y the closing axis and z the approach (TCP
+frame), take the cloud points inside the volume the fingers sweep,
+
+    S = { p : |p_x| < w_f / 2,  z_0 < p_z < z_1,  |p_y| < stroke / 2 }
+
+and move the TCP along y by  c = (min_S p_y + max_S p_y) / 2  - the middle of the two contacts the
+fingers would make. Fewer than `min_points` points in S: the grasp is left as it is.
+Our addition (not in the paper); `nift bench --no-center-grasp` measures without it.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from hardware.sim.gripper_model import GripperGeometry
+
+MIN_POINTS = 5  # fewer points between the fingers than this: nothing to centre on
+
+
+def swept_points(T_base_tcp: np.ndarray, cloud: np.ndarray, geometry: GripperGeometry = GripperGeometry()) -> np.ndarray:
+    """The cloud points (K, 3), in the TCP frame, inside the volume the closing fingers sweep."""
+    p = (np.asarray(cloud, float) - T_base_tcp[:3, 3]) @ T_base_tcp[:3, :3]  # (N, 3) TCP frame
+    tip = geometry.palm[2] + geometry.finger[2] - geometry.tcp_z  # fingertips, along z past the TCP
+    inside = ((np.abs(p[:, 0]) < geometry.finger[0] / 2) & (p[:, 2] < tip) & (p[:, 2] > tip - geometry.finger[2])
+              & (np.abs(p[:, 1]) < geometry.stroke / 2))
+    return p[inside]
+
+
+def center_grasp(T_base_tcp: np.ndarray, cloud: np.ndarray, geometry: GripperGeometry = GripperGeometry(),
+                 min_points: int = MIN_POINTS) -> np.ndarray:
+    """T_base_tcp moved along its closing axis (y) to the middle of the swept points' extent."""
+    p = swept_points(T_base_tcp, cloud, geometry)
+    if len(p) < min_points:
+        return T_base_tcp.copy()
+    shift = (p[:, 1].min() + p[:, 1].max()) / 2
+    out = T_base_tcp.copy()
+    out[:3, 3] += shift * T_base_tcp[:3, 1]
+    return out

@@ -1,0 +1,85 @@
+"""Grasp centring: the analytic shift, what it ignores, and the physical outcome it is for."""
+import numpy as np
+import pytest
+
+from app.grasp_centering import MIN_POINTS, center_grasp, swept_points
+from app.se3 import make_pose, random_rotations, transform_points
+from hardware.sim.gripper_model import GripperGeometry
+
+
+def _pose(seed: int) -> np.ndarray:
+    rng = np.random.default_rng(seed)
+    return make_pose(random_rotations(1, rng)[0], rng.uniform(-0.5, 0.5, 3))
+
+
+def _slab(y0: float, y1: float, n: int = 200, seed: int = 0) -> np.ndarray:
+    """Points (n, 3), TCP frame, of a wall between y0 and y1 inside the fingers' reach."""
+    rng = np.random.default_rng(seed)
+    return np.column_stack([rng.uniform(-0.01, 0.01, n), rng.uniform(y0, y1, n), rng.uniform(-0.03, 0.015, n)])
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_a_wall_off_centre_ends_up_between_the_fingers(seed):
+    T = _pose(seed)
+    wall = _slab(0.006, 0.010, seed=seed)
+    out = center_grasp(T, transform_points(T, wall))
+    np.testing.assert_allclose(out[:3, :3], T[:3, :3])  # only moved, along the closing axis
+    seen = swept_points(out, transform_points(T, wall))
+    middle = (seen[:, 1].min() + seen[:, 1].max()) / 2
+    assert abs(middle) < 1e-9
+    shift = np.linalg.inv(T) @ out
+    np.testing.assert_allclose(shift[:3, 3], [0.0, (wall[:, 1].min() + wall[:, 1].max()) / 2, 0.0], atol=1e-12)
+
+
+def test_points_the_fingers_cannot_reach_are_ignored():
+    T = _pose(3)
+    g = GripperGeometry()
+    wall = _slab(-0.004, 0.0)
+    beyond = np.array([[0.0, 0.03, 0.05],  # past the fingertips
+                       [0.02, 0.03, 0.0],  # beside the fingers (x over half their width)
+                       [0.0, g.stroke, 0.0]])  # outside the open fingers
+    alone = center_grasp(T, transform_points(T, wall))
+    with_far = center_grasp(T, transform_points(T, np.vstack([wall, beyond])))
+    np.testing.assert_allclose(with_far, alone)
+
+
+def test_too_few_points_leave_the_grasp_as_it_is():
+    T = _pose(4)
+    few = transform_points(T, _slab(0.01, 0.02, n=MIN_POINTS - 1))
+    np.testing.assert_array_equal(center_grasp(T, few), T)
+    np.testing.assert_array_equal(center_grasp(T, np.empty((0, 3))), T)
+
+
+def test_a_centred_wall_is_not_moved():
+    T = _pose(5)
+    wall = _slab(-0.003, 0.003)
+    wall[:2, 1] = [-0.003, 0.003]  # exact extremes
+    np.testing.assert_allclose(center_grasp(T, transform_points(T, wall)), T, atol=1e-12)
+
+
+def test_a_bowl_grasp_8mm_off_the_wall_fails_and_centred_holds():
+    """The teleported judge holds the bowl while the fingers close: 8 mm off, one finger misses."""
+    from app.judges import judge_grasp
+    from app.objects import split
+    from app.spawn import spawn
+    from app.tasks import teacher_grasp
+    from hardware.sim.world import SimWorld, SimWorldConfig
+
+    world = SimWorld(SimWorldConfig())
+    world.connect()
+    try:
+        seed = split("bowl", "test")[0]
+        verdicts = []
+        for centred in (False, True):
+            obj = spawn(world, "bowl", seed, "upright", T_world_obj=make_pose(np.eye(3), [0.5, 0.0, 0.0]))
+            T_world_obj = world.pose(obj.body)
+            T = T_world_obj @ teacher_grasp(obj.mesh) @ make_pose(np.eye(3), [0.0, -0.008, 0.0])  # away from the axis
+            if centred:
+                cloud = transform_points(T_world_obj, obj.mesh.sample(20000, seed=0))
+                T = center_grasp(T, cloud)
+            verdicts.append(judge_grasp(world, obj, T))
+            world.remove(obj.body)
+        assert not verdicts[0].success, verdicts[0].reason
+        assert verdicts[1].success, verdicts[1].reason
+    finally:
+        world.disconnect()
