@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Installs NIFT cell into ./.venv: the Debian libraries Open3D needs, then the package itself.
-# Usage: scripts/install.sh [--test]      (--test adds pytest)
+# Usage: scripts/install.sh [--test]      (--test adds pytest; NIFT_UNPINNED=1 skips scripts/constraints.txt)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -23,5 +23,7 @@ pip_install --upgrade pip
 # torch first and exactly pinned, so nothing later can pull a CUDA build.
 pip_install "torch==2.13.0"
 extra=""; [ "${1:-}" = "--test" ] && extra="[test]"
-pip_install -e ".${extra}"
+# The versions the README's figures were measured with: a newer PyBullet or CoACD changes physics.
+pins=(-c scripts/constraints.txt); [ "${NIFT_UNPINNED:-0}" = "1" ] && pins=()
+pip_install -e ".${extra}" "${pins[@]}"
 echo "NIFT cell installed in .venv ($(.venv/bin/nift --version))"
