@@ -1,8 +1,9 @@
 """Template loss at the found pose vs at the scripted teacher's pose on unseen test objects (shipped NIF and NITs).
 
-Usage (repo root): .venv/bin/python scripts/diagnose_template_loss.py
+Usage (repo root): .venv/bin/python scripts/diagnose_template_loss.py [TASK ...]   (default: mug bottle)
 If the found pose scores lower than the teacher's, the optimiser is not what fails: the objective is.
 """
+import sys
 import numpy as np, torch
 from app.bench.imitation import target
 from app.recorder import task_templates
@@ -17,7 +18,7 @@ def loss_at(tpl, cloud, T):
     with torch.no_grad():
         z = f.encode(cloud); x = torch.as_tensor(tpl.points @ T[:3,:3].T + T[:3,3], dtype=torch.float32)[None]
         return float((f.features(z, x)[0] - torch.as_tensor(tpl.features)).abs().sum(-1).mean())
-for name in ["mug", "bottle"]:
+for name in sys.argv[1:] or ["mug", "bottle"]:
     t = task(name); tpl = task_templates(t)
     rng = np.random.default_rng(3)
     for s in split(t.category, "test")[:3]:
