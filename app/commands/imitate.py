@@ -19,6 +19,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--demos", type=Path, help="task directory (default demos/<task>)")
     p.add_argument("--seed", type=int, default=0, help="initial rotations and translations")
     add_imitation_arguments(p)
+    p.add_argument("--no-center-grasp", dest="center_grasp", action="store_false",
+                   help="the grasp as the optimisation found it, not centred between the fingers")
     p.add_argument("--json", action="store_true", help="print the poses and losses as JSON")
 
 
@@ -32,7 +34,8 @@ def run(args: argparse.Namespace) -> int:
     from app.tasks import task
 
     cloud = load_cloud(args.cloud)
-    pred = predict(task(args.task), cloud, args.method, directory=args.demos, config=imitation_config(args))
+    pred = predict(task(args.task), cloud, args.method, directory=args.demos, config=imitation_config(args),
+                   center=args.center_grasp)
     if args.json:
         print(json.dumps(pred.record(), indent=2))
         return 0
