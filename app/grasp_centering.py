@@ -9,7 +9,8 @@ bowls, 10 mm towards it on 0 of 4: `scripts/diagnose_grasp_tolerance.py`;
 `tests/test_grasp_centering.py` checks 8 mm).
 This step does in software what the closing would do on a real cell - and so does not push the
 object there either: with x along the finger width, y the closing axis and z the approach (TCP
-frame), take the cloud points inside the volume the fingers sweep,
+frame), take the cloud points inside the volume the fingers sweep (finger width w_f, the fingers
+running from z_0 at the palm to z_1 at their tips),
 
     S = { p : |p_x| < w_f / 2,  z_0 < p_z < z_1,  |p_y| < stroke / 2 }
 
@@ -29,8 +30,9 @@ MIN_POINTS = 5  # fewer points between the fingers than this: nothing to centre 
 def swept_points(T_base_tcp: np.ndarray, cloud: np.ndarray, geometry: GripperGeometry = GripperGeometry()) -> np.ndarray:
     """The cloud points (K, 3), in the TCP frame, inside the volume the closing fingers sweep."""
     p = (np.asarray(cloud, float) - T_base_tcp[:3, 3]) @ T_base_tcp[:3, :3]  # (N, 3) TCP frame
-    tip = geometry.palm[2] + geometry.finger[2] - geometry.tcp_z  # fingertips, along z past the TCP
-    inside = ((np.abs(p[:, 0]) < geometry.finger[0] / 2) & (p[:, 2] < tip) & (p[:, 2] > tip - geometry.finger[2])
+    z0 = geometry.palm[2] - geometry.tcp_z  # where the fingers leave the palm, TCP frame
+    z1 = z0 + geometry.finger[2]  # the fingertips
+    inside = ((np.abs(p[:, 0]) < geometry.finger[0] / 2) & (z0 < p[:, 2]) & (p[:, 2] < z1)
               & (np.abs(p[:, 1]) < geometry.stroke / 2))
     return p[inside]
 
