@@ -55,10 +55,16 @@ def read_npz(path: str | Path, fmt: str, kind: str, names: tuple[str, ...]) -> t
     try:
         with np.load(path, allow_pickle=False) as z:
             header = json.loads(str(z["header"]))
+            found = header.get("format") if isinstance(header, dict) else None
+            if found != fmt:  # before the arrays: another version may name other ones
+                raise _WrongFormat(f"{path}: expected format {fmt!r}, found {found!r}")
             arrays = {name: z[name] for name in names}
     except (zipfile.BadZipFile, ValueError, KeyError, OSError, EOFError) as exc:
+        if isinstance(exc, _WrongFormat):
+            raise ValueError(str(exc)) from None
         raise ValueError(f"{path} is not a readable {kind} file ({type(exc).__name__})") from None
-    found = header.get("format") if isinstance(header, dict) else None
-    if found != fmt:
-        raise ValueError(f"{path}: expected format {fmt!r}, found {found!r}")
     return header, arrays
+
+
+class _WrongFormat(ValueError):
+    """A readable file of another format or version (kept apart from corrupt-file errors)."""

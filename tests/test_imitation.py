@@ -63,9 +63,11 @@ def test_moving_the_cloud_moves_the_grasp_the_same_way(demo):
     assert good >= 9
 
 
-def test_every_initialisation_is_scored_on_all_points_after_a_subset_exploration(demo):
+@pytest.mark.parametrize("stage", ["grasp", "place"])
+def test_every_initialisation_is_scored_on_all_points_after_a_subset_exploration(demo, stage):
     """Pruned inits explored on a 64-point subset: their reported losses are Eq. 5 over all 500
-    points at their poses, so the winner is the true lowest."""
+    points at their poses, so the winner is the true lowest. Grasp: the paper's mean; place: the
+    contact-weighted mean, weights exp(-(d - min d) / s) / sum."""
     import torch
 
     from app.nift.field import load_field
@@ -74,15 +76,33 @@ def test_every_initialisation_is_scored_on_all_points_after_a_subset_exploration
     from app.se3 import transform_points
 
     cloud, stages = demo
-    template = stages["grasp"][0]
+    template = stages[stage][0]
     config = ImitationConfig(inits=6, iterations=40, prune_every=10, explore_points=64, seed=1)
     result = imitate(template, cloud, config)
+    d, s = template.distances, config.contact_scale(template.anchor)
+    w = np.full(len(d), 1 / len(d)) if stage == "grasp" else np.exp(-(d - d.min()) / s) / np.exp(-(d - d.min()) / s).sum()
+    assert (stage == "grasp") == (s == 0.0)
     field = load_field("nif")
     with torch.no_grad(), frozen(field):
         latent = field.encode(cloud)
         x = np.stack([transform_points(T, template.points) for T in result.poses])  # (6, 500, 3)
         f = point_features(field, "nif", latent, torch.as_tensor(x, dtype=torch.float32))
-        full = (f - torch.as_tensor(template.features)).abs().sum(-1).mean(-1).numpy()
+        full = ((f - torch.as_tensor(template.features)).abs().sum(-1).numpy() * w).sum(-1)
     assert np.allclose(result.losses, full, rtol=1e-3)
     assert result.best == int(np.argmin(full))
     assert len(np.unique(result.losses.round(6))) == 6  # the dropped ones kept their own poses
+
+
+def test_template_points_know_their_distance_to_the_anchor_which_on_the_ibs_is_the_objects(demo):
+    """IBS points are equidistant to both objects: the stored distance to the rack matches the
+    distance to the mug's cloud to within the bisector's resolution."""
+    from scipy.spatial import cKDTree
+
+    from app.se3 import transform_points
+
+    cloud, stages = demo
+    template, T_base_rack = stages["place"]
+    to_cloud = cKDTree(cloud).query(transform_points(T_base_rack, template.points))[0]
+    assert template.distances.shape == (len(template.points),) and (template.distances >= 0).all()
+    assert np.median(np.abs(template.distances - to_cloud)) < 0.004
+    assert np.corrcoef(template.distances, to_cloud)[0, 1] > 0.95

@@ -6,7 +6,7 @@ import pytest
 import torch
 
 from app.nift.imitate import rotation_from_6d, rotation_to_6d
-from app.nift.template import (FORMAT, Template, density_resample, field_id, load_template,
+from app.nift.template import (FORMAT, StaleTemplate, Template, density_resample, field_id, load_template,
                                save_template)
 from app.se3 import random_rotations
 
@@ -38,7 +38,7 @@ def test_6d_rotations_are_proper_and_round_trip_even_at_180_degrees():
 def fake_template(feature_dim=4, anchor="gripper"):
     rng = np.random.default_rng(0)
     return Template(rng.normal(size=(30, 3)), rng.normal(size=(30, feature_dim)).astype(np.float32), anchor,
-                    "ibs", "nif", field_id("nif"), ["demo-0"])
+                    "ibs", "nif", field_id("nif"), ["demo-0"], rng.uniform(0, 0.1, 30))
 
 
 def test_template_files_round_trip_and_bad_files_are_refused(tmp_path):
@@ -46,6 +46,7 @@ def test_template_files_round_trip_and_bad_files_are_refused(tmp_path):
     path = save_template(t, tmp_path / "t.nit.npz")
     back = load_template(path)
     assert np.allclose(back.points, t.points, atol=1e-6) and np.array_equal(back.features, t.features)
+    assert np.allclose(back.distances, t.distances, atol=1e-7)
     assert (back.anchor, back.query, back.feature, back.demos) == ("gripper", "ibs", "nif", ["demo-0"])
     with pytest.raises(FileNotFoundError, match="no template"):
         load_template(tmp_path / "missing.npz")
@@ -57,14 +58,18 @@ def test_template_files_round_trip_and_bad_files_are_refused(tmp_path):
         load_template(tmp_path / "short.npz")
     with np.load(path) as z:
         header = json.loads(str(z["header"]))
-        arrays = {k: z[k] for k in ("points", "features")}
+        arrays = {k: z[k] for k in ("points", "features", "distances")}
     for change, message in (({"format": "nift-nit/0"}, "expected format"),
                             ({"field": "nif:000000000000"}, "was built with field")):
         bad = tmp_path / "bad.npz"
         np.savez(bad, header=np.array(json.dumps({**header, **change})), **arrays)
         with pytest.raises(ValueError, match=message):
             load_template(bad)
-    assert FORMAT == "nift-nit/1"
+    old = tmp_path / "v1.npz"  # the first version had no distances: stale, so it is rebuilt from its demos
+    np.savez(old, header=np.array(json.dumps({**header, "format": "nift-nit/1"})), **arrays)
+    with pytest.raises(StaleTemplate, match="rebuild it from its demos"):
+        load_template(old)
+    assert FORMAT == "nift-nit/2"
 
 
 def test_templates_of_other_nif_weights_sit_beside_the_shipped_ones(tmp_path):

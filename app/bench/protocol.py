@@ -16,6 +16,7 @@ import numpy as np
 import trimesh
 
 from app.cell import CellConfig
+from app.nift.imitation_config import ImitationConfig
 from app.nift.raycast import scene_of
 from app.perception import resample
 from app.training.views import CAMERAS, kinect_cloud
@@ -41,7 +42,12 @@ class BenchConfig:
     seed: int = 0
     nif: str | None = None  # NIF weights for the nif and scf rows (None: the shipped field); Table III
     center_grasp: bool = True  # centre every method's grasp between the fingers (app.grasp_centering)
+    place_contact_scale: float = ImitationConfig.place_contact_scale  # contact weighting of place templates; 0: the paper's
     cell: CellConfig = field(default_factory=CellConfig)
+
+    def imitation(self, index: int) -> ImitationConfig:
+        """The optimiser settings of trial `index` (its seed is the index, as for every method)."""
+        return ImitationConfig(seed=index, place_contact_scale=self.place_contact_scale)
 
     def check(self) -> None:
         """A one-line error for a setting this benchmark does not know."""

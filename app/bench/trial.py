@@ -17,7 +17,6 @@ from app.jobs import JobConfig
 from app.judges import judge_grasp, judge_place
 from app.methods import ORACLE
 from app.motion.scene import PlanningScene
-from app.nift.imitate import ImitationConfig
 from app.oracle import teacher_prediction
 from app.predict import predict
 from app.sim_jobs import JobSpec, run_sim_job, spawn_test_object
@@ -57,7 +56,7 @@ class TeleportedBench:
                     pred = teacher_prediction(t, obj.mesh, obj.scale, T_base_obj, T_base_fixture)
                 else:
                     pred = predict(t, cloud, method, T_base_fixture, demo_root / t.demos,
-                                   ImitationConfig(seed=trial.index), config.nif, config.center_grasp)
+                                   config.imitation(trial.index), config.nif, config.center_grasp)
             except ValueError as exc:
                 rows.append({**base, "method": method, "grasp": False, "place": False, "overall": False,
                              "why": f"no prediction: {exc}", "seconds": round(time.perf_counter() - start, 2)})
@@ -99,7 +98,7 @@ class ExecutedBench:
         t = task(trial.task)
         rows = []
         for method in config.methods:
-            job = JobConfig(method=method, demos=demo_root / t.demos, imitation=ImitationConfig(seed=trial.index),
+            job = JobConfig(method=method, demos=demo_root / t.demos, imitation=config.imitation(trial.index),
                             center_grasp=config.center_grasp)
             r = run_sim_job(self.sim, self.scene, self.T_base_cam, JobSpec(t, tuple(trial.seed(config.seed)), trial.pose), job)
             failed = r.failed_stage or ""

@@ -26,6 +26,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--nif", help="NIF weights for the nif and scf rows (default: the shipped field); Table III")
     p.add_argument("--no-center-grasp", dest="center_grasp", action="store_false",
                    help="judge the methods' grasps as predicted, not centred between the fingers (README)")
+    from app.nift.imitation_config import ImitationConfig
+
+    p.add_argument("--place-contact-scale", type=float, default=ImitationConfig.place_contact_scale,
+                   help="metres: weight place template points by exp(-d / scale), d their distance to the rack or "
+                        f"shelf (default {ImitationConfig.place_contact_scale}; 0: the paper's plain mean; README)")
     p.add_argument("--workers", type=int, default=2, help="worker processes (default 2, one per core)")
     p.add_argument("--minutes", type=float,
                    help="stop after this wall time and write the table of the trials done (the same command resumes)")
@@ -59,7 +64,8 @@ def run(args: argparse.Namespace) -> int:
             raise ValueError(f"unknown pose setting {pose!r}; choose from {', '.join(POSES)}")
     methods = tuple(m if m == ORACLE else check_method(m) for m in _names(args.methods))
     config = BenchConfig(tasks, poses, methods, args.trials, args.demos, args.camera, args.setting, args.seed,
-                         args.nif, center_grasp=args.center_grasp)
+                         args.nif, center_grasp=args.center_grasp,
+                         place_contact_scale=args.place_contact_scale)
     with tqdm(unit="trial", desc="bench", disable=args.json) as bar:
         def progress(done: int, total: int) -> None:
             bar.total = total

@@ -5,7 +5,7 @@ import argparse
 
 
 def add_imitation_arguments(p: argparse.ArgumentParser) -> None:
-    """--inits, --iterations, --prune-every, --patience, --explore-points."""
+    """--inits, --iterations, --prune-every, --patience, --explore-points, --{grasp,place}-contact-scale."""
     from app.nift.imitation_config import ImitationConfig as C
 
     p.add_argument("--inits", type=int, default=C.inits, help=f"parallel initialisations (paper: 10; default {C.inits})")
@@ -17,6 +17,10 @@ def add_imitation_arguments(p: argparse.ArgumentParser) -> None:
                    help="stop when no initialisation improved for this many steps")
     p.add_argument("--explore-points", type=int, default=C.explore_points,
                    help="template points the loss uses while pruning (0: all)")
+    p.add_argument("--grasp-contact-scale", type=float, default=C.grasp_contact_scale,
+                   help="metres: weight grasp template points by exp(-d / scale), d their distance to the gripper (0: the paper's mean)")
+    p.add_argument("--place-contact-scale", type=float, default=C.place_contact_scale,
+                   help="metres: the same for place templates (distance to the rack or shelf; 0: the paper's mean)")
 
 
 def imitation_config(args: argparse.Namespace):
@@ -24,4 +28,6 @@ def imitation_config(args: argparse.Namespace):
     from app.nift.imitation_config import ImitationConfig
 
     return ImitationConfig(inits=args.inits, iterations=args.iterations, prune_every=args.prune_every,
-                           patience=args.patience, explore_points=args.explore_points, seed=args.seed)
+                           patience=args.patience, explore_points=args.explore_points,
+                           grasp_contact_scale=args.grasp_contact_scale,
+                           place_contact_scale=args.place_contact_scale, seed=args.seed)

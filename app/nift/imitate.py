@@ -1,6 +1,9 @@
 """Interaction imitation by pose optimisation (paper Sec. III-C, Eq. 5):
 
-    T* = argmin_T  sum_{x in X}  | f(x | O_demo) - f(T x | O_target) |_1
+    T* = argmin_T  sum_{x in X}  w(x) | f(x | O_demo) - f(T x | O_target) |_1
+
+with w(x) = 1 / |X| in the paper; ours, for place templates, w(x) ~ exp(-d(x) / s), d(x) the point's
+distance to the anchor and s = `place_contact_scale` (contact weighting, see ImitationConfig).
 
 X and f(x | O_demo) come from a template (`app.nift.template`); T maps the anchor frame into the
 target cloud's frame, so T* is the anchor's pose there: the gripper pose for a grasp template,
@@ -68,6 +71,16 @@ def rotation_to_6d(R: torch.Tensor) -> torch.Tensor:
     return torch.cat([R[:, :, 0], R[:, :, 1]], dim=-1)
 
 
+def point_weights(template: Template, contact_scale: float) -> np.ndarray:
+    """Weights (M,) summing to 1: w(x) ~ exp(-(d(x) - min d) / contact_scale), d = the point's distance
+    to the anchor; uniform (the paper's mean) when contact_scale is 0 or the template has no distances."""
+    d = template.distances
+    if not contact_scale or d is None:
+        return np.full(len(template.points), 1.0 / len(template.points))
+    w = np.exp(-(d - d.min()) / contact_scale)
+    return w / w.sum()
+
+
 def lr_at(config: ImitationConfig, iteration: int) -> float:
     """Cosine decay from lr to lr * lr_final_ratio over the iteration budget."""
     return cosine(config.lr, config.lr * config.lr_final_ratio, iteration / config.iterations)
@@ -116,6 +129,7 @@ def _optimise(template: Template, cloud: np.ndarray, config: ImitationConfig, fi
     rng = np.random.default_rng(config.seed)
     X = torch.as_tensor(template.points, dtype=torch.float32)  # (M, 3)
     target = torch.as_tensor(template.features, dtype=torch.float32)  # (M, F)
+    w = torch.as_tensor(point_weights(template, config.contact_scale(template.anchor)), dtype=torch.float32)  # (M,) sum 1
     c_X, c_O = X.mean(dim=0), torch.as_tensor(cloud.mean(axis=0), dtype=torch.float32)
     R0 = torch.as_tensor(random_rotations(config.inits, rng), dtype=torch.float32)
     r6 = rotation_to_6d(R0).requires_grad_(True)  # (I, 6)
@@ -128,11 +142,11 @@ def _optimise(template: Template, cloud: np.ndarray, config: ImitationConfig, fi
 
     def losses(r6: torch.Tensor, t: torch.Tensor, rows: torch.Tensor | None = None) -> torch.Tensor:
         """Eq. 5 per initialisation (I,), over the template's points or the subset `rows`."""
-        Xs, target_s = (X, target) if rows is None else (X[rows], target[rows])
+        Xs, target_s, ws = (X, target, w) if rows is None else (X[rows], target[rows], w[rows] / w[rows].sum())
         R = rotation_from_6d(r6)  # (I, 3, 3)
         x = torch.einsum("iab,mb->ima", R, Xs - c_X) + c_O + t[:, None]  # (I, M, 3)
         f = point_features(field, feature, latent, x)  # (I, M, F)
-        return (f - target_s).abs().sum(dim=-1).mean(dim=-1)  # (I,)
+        return ((f - target_s).abs().sum(dim=-1) * ws).sum(dim=-1)  # (I,)
 
     exploring = bool(config.prune_every) and config.inits > config.keep and 0 < config.explore_points < len(X)
     rows = torch.as_tensor(rng.choice(len(X), config.explore_points, replace=False)) if exploring else None

@@ -12,7 +12,9 @@ points is resampled back to M points with probability proportional to a density 
 
     w(x) = 1 / mean_{k nearest} |x - x_k|,   k = number of demos    (more weight where demos agree)
 
-and the template feature of a point is the mean over demos of f(T_d x | O_d).
+and the template feature of a point is the mean over demos of f(T_d x | O_d). Each point also keeps
+its distance to the anchor's surface (0 inside it), which imitation may use to weight the points
+near the contact (`ImitationConfig.contact_scale`, our addition).
 Features: "nif" (all NIF decoder activations), "ndf" (all NDF activations), "scf" (the NIF's
 predicted SCF c_0..c_n).
 """
@@ -32,7 +34,8 @@ from app.nift.ibs import compute_ibs
 from app.nift.raycast import scene_of, signed_distance
 from app.se3 import invert, transform_points
 
-FORMAT = "nift-nit/1"
+FORMAT = "nift-nit/2"
+OLDER_FORMATS = ("nift-nit/1",)  # readable headers, but no distances: rebuild from the demos
 QUERIES = ("ibs", "bps")
 FEATURES = {"nif": "nif", "ndf": "ndf", "scf": "nif"}  # feature kind -> the field it comes from
 
@@ -58,6 +61,7 @@ class Template:
     feature: str  # "nif", "ndf" or "scf"
     field_id: str  # which weights made the features (name + sha256 prefix)
     demos: list[str] = field(default_factory=list)
+    distances: np.ndarray | None = None  # (M,) each point's distance to the anchor's surface, metres
 
 
 def field_id(name_or_path: str | Path) -> str:
@@ -124,21 +128,24 @@ def build_template(anchor: str, anchor_mesh, demos: list[dict], query: str = "ib
     per_demo = [query_points(query, anchor_mesh, d["T_frame_anchor"], d["cloud"], n_points, seed + i)
                 for i, d in enumerate(demos)]
     points = per_demo[0] if len(demos) == 1 else density_resample(np.concatenate(per_demo), n_points, len(demos), rng)
+    distances = np.maximum(signed_distance(scene_of(anchor_mesh), points), 0.0)  # (M,)
     feats = []
     with torch.no_grad():
         for d in demos:
             x = transform_points(d["T_frame_anchor"], points)[None]  # (1, M, 3) demo frame
             feats.append(point_features(field, feature, field.encode(d["cloud"]), x)[0].numpy())
     return Template(points, np.mean(feats, axis=0).astype(np.float32), anchor, query, feature, field_id(weights),
-                    [d.get("name", "") for d in demos])
+                    [d.get("name", "") for d in demos], distances.astype(np.float32))
 
 
 def save_template(t: Template, path: str | Path) -> Path:
-    """Write a NIT atomically: an .npz with the arrays and a JSON header (format nift-nit/1)."""
+    """Write a NIT atomically: an .npz with the arrays and a JSON header (format nift-nit/2)."""
+    if t.distances is None:
+        raise ValueError("a template to save needs its points' distances to the anchor")
     header = {"format": FORMAT, "anchor": t.anchor, "query": t.query, "feature": t.feature,
               "field": t.field_id, "demos": t.demos}
-    return write_npz(path, {"points": t.points.astype(np.float32), "features": t.features.astype(np.float32)},
-                     header)
+    return write_npz(path, {"points": t.points.astype(np.float32), "features": t.features.astype(np.float32),
+                            "distances": np.asarray(t.distances, np.float32)}, header)
 
 
 def load_template(path: str | Path, weights: str | Path | None = None) -> Template:
@@ -147,12 +154,18 @@ def load_template(path: str | Path, weights: str | Path | None = None) -> Templa
     path = Path(path)
     if not path.is_file():
         raise FileNotFoundError(f"no template at {path}")
-    header, arrays = read_npz(path, FORMAT, "NIT", ("points", "features"))
-    points, features = arrays["points"], arrays["features"]
-    if points.shape[0] != features.shape[0] or points.shape[1:] != (3,):
-        raise ValueError(f"{path}: points {points.shape} and features {features.shape} do not match")
+    try:
+        header, arrays = read_npz(path, FORMAT, "NIT", ("points", "features", "distances"))
+    except ValueError as exc:
+        if any(f"found {old!r}" in str(exc) for old in OLDER_FORMATS):
+            raise StaleTemplate(f"{exc}; rebuild it from its demos") from None
+        raise
+    points, features, distances = arrays["points"], arrays["features"], arrays["distances"]
+    if points.shape[0] != features.shape[0] or points.shape[1:] != (3,) or distances.shape != points.shape[:1]:
+        raise ValueError(f"{path}: points {points.shape}, features {features.shape} and distances "
+                         f"{distances.shape} do not match")
     t = Template(points.astype(np.float64), features, header["anchor"], header["query"], header["feature"],
-                 header["field"], header["demos"])
+                 header["field"], header["demos"], distances.astype(np.float64))
     current = field_id(weights or FEATURES[t.feature])
     if current != t.field_id:
         raise StaleTemplate(f"{path} was built with field {t.field_id}, not with {current}; rebuild it from its demos")
