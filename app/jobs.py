@@ -42,6 +42,7 @@ class JobConfig:
     # inside a bowl swept the far finger into its wall and dragged it off the shelf on the retreat
     demos: Path | None = None  # task directory (default demos/<task>)
     center_grasp: bool = True  # centre the predicted grasp between the fingers (app.grasp_centering)
+    feasible: bool = True  # prefer grasps that close on something and places the grasp can carry to (app.feasibility)
     perception: PerceptionConfig = PerceptionConfig()
     imitation: ImitationConfig = ImitationConfig()
     executor: ExecutorConfig = ExecutorConfig()
@@ -112,7 +113,8 @@ def run_job(t: Task, arm: Arm, gripper: Gripper, camera: DepthCamera, T_base_cam
     if predictor is None:
         def predictor(cloud: np.ndarray) -> Prediction:
             return predict(t, cloud, config.method, T_base_fixture, config.demos, config.imitation,
-                           center=config.center_grasp)
+                           center=config.center_grasp,
+                           feasible=config.feasible)
     try:
         _run(t, arm, gripper, camera, T_base_cam, T_base_fixture, scene, config, hooks, predictor, result)
         result.arm = "home"

@@ -11,8 +11,10 @@ imitation, Eq. 5), "nift" = "ibs-nif", and "cpd" (demo registration). Every meth
   (when it is known, as in simulation), and with a rigid grasp the gripper's place pose is
   motion @ T_base_tcp.
 
-The grasp is then centred on the cloud points between the fingers (`app.grasp_centering`, our
-addition, on by default, for every method alike).
+Template methods rank their candidate poses by feasibility first (`app.feasibility`, our addition):
+a grasp must close on cloud points, a place must be one the grasp could carry the object to as in
+the demos. The grasp is then centred on the cloud points between the fingers (`app.grasp_centering`,
+our addition). Both on by default, for every method alike.
 """
 from __future__ import annotations
 
@@ -22,6 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
+from app.feasibility import carries_like_demos, grips_something
 from app.grasp_centering import center_grasp
 from app.nift.cpd import best_registration
 from app.methods import check_method
@@ -60,18 +63,18 @@ class Prediction:
 
 def predict(t: Task, cloud: np.ndarray, method: str = "nift", T_base_fixture: np.ndarray | None = None,
             directory: Path | None = None, config: ImitationConfig = ImitationConfig(),
-            nif: str | Path | None = None, center: bool = True) -> Prediction:
+            nif: str | Path | None = None, center: bool = True, feasible: bool = True) -> Prediction:
     """Grasp pose and place motion for a target cloud (N, 3) in the base frame (`nif`: NIF weights for
     the nif and scf features, default the shipped ones; `center`: centre the grasp on the points
-    between the fingers, `app.grasp_centering`)."""
-    pred = _predict(t, cloud, method, T_base_fixture, directory, config, nif)
+    between the fingers, `app.grasp_centering`; `feasible`: prefer feasible poses, `app.feasibility`)."""
+    pred = _predict(t, cloud, method, T_base_fixture, directory, config, nif, feasible)
     if center:
         pred.T_base_tcp = center_grasp(pred.T_base_tcp, cloud)
     return pred
 
 
 def _predict(t: Task, cloud: np.ndarray, method: str, T_base_fixture: np.ndarray | None, directory: Path | None,
-             config: ImitationConfig, nif: str | Path | None) -> Prediction:
+             config: ImitationConfig, nif: str | Path | None, feasible: bool = True) -> Prediction:
     """`predict` before the grasp is centred."""
     key = check_method(method)
     directory = directory or DEMOS_DIR / t.demos
@@ -84,8 +87,12 @@ def _predict(t: Task, cloud: np.ndarray, method: str, T_base_fixture: np.ndarray
     query, feature = key.split("-")
     templates = task_templates(t, directory, query, feature, nif=nif)
     field = load_field(nif_override(feature, nif) or FEATURES[feature])  # once for both templates
-    grasp = imitate(templates["grasp"], cloud, config, field)
-    place = imitate(templates["place"], cloud, config, field)
+    grasp = imitate(templates["grasp"], cloud, config, field, grips_something(cloud) if feasible else None)
+    carry = None
+    if feasible:
+        carried = [invert(d.place_anchor()) @ d.T_base_tcp for d in task_demos(directory)]  # each demo's T_fixture_tcp
+        carry = carries_like_demos(grasp.T, carried)
+    place = imitate(templates["place"], cloud, config, field, carry)
     return Prediction(method, grasp.T, place.T, T_base_fixture @ invert(place.T),
                       {"grasp": grasp.losses.round(5).tolist(), "place": place.losses.round(5).tolist()},
                       {"grasp": grasp.iterations, "place": place.iterations},

@@ -106,3 +106,17 @@ def test_template_points_know_their_distance_to_the_anchor_which_on_the_ibs_is_t
     assert template.distances.shape == (len(template.points),) and (template.distances >= 0).all()
     assert np.median(np.abs(template.distances - to_cloud)) < 0.004
     assert np.corrcoef(template.distances, to_cloud)[0, 1] > 0.95
+
+
+def test_a_feasibility_predicate_rules_poses_out_and_only_a_predicate_nothing_passes_is_ignored(demo):
+    """Imitation on the demo's own cloud with poses near the truth declared infeasible: the winner is
+    a feasible pose; with every pose infeasible it is the lowest loss, as without a predicate."""
+    cloud, stages = demo
+    template, truth = stages["grasp"]
+    far = lambda poses: np.linalg.norm(poses[:, :3, 3] - truth[:3, 3], axis=1) > 0.03  # noqa: E731
+    config = ImitationConfig(seed=1, iterations=150)
+    ruled = imitate(template, cloud, config, feasible=far)
+    assert ruled.feasible[ruled.best] and np.linalg.norm(ruled.T[:3, 3] - truth[:3, 3]) > 0.03
+    assert ruled.feasible.tolist() == far(ruled.poses).tolist()
+    nothing = imitate(template, cloud, config, feasible=lambda poses: np.zeros(len(poses), bool))
+    assert nothing.best == int(np.argmin(nothing.losses)) and not nothing.feasible.any()

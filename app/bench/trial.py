@@ -56,7 +56,8 @@ class TeleportedBench:
                     pred = teacher_prediction(t, obj.mesh, obj.scale, T_base_obj, T_base_fixture)
                 else:
                     pred = predict(t, cloud, method, T_base_fixture, demo_root / t.demos,
-                                   config.imitation(trial.index), config.nif, config.center_grasp)
+                                   config.imitation(trial.index), config.nif, config.center_grasp,
+                                   config.feasible)
             except ValueError as exc:
                 rows.append({**base, "method": method, "grasp": False, "place": False, "overall": False,
                              "why": f"no prediction: {exc}", "seconds": round(time.perf_counter() - start, 2)})
@@ -99,7 +100,7 @@ class ExecutedBench:
         rows = []
         for method in config.methods:
             job = JobConfig(method=method, demos=demo_root / t.demos, imitation=config.imitation(trial.index),
-                            center_grasp=config.center_grasp)
+                            center_grasp=config.center_grasp, feasible=config.feasible)
             r = run_sim_job(self.sim, self.scene, self.T_base_cam, JobSpec(t, tuple(trial.seed(config.seed)), trial.pose), job)
             failed = r.failed_stage or ""
             grasp = r.success or failed in ("place", "release", "retreat", "verify")  # held through the carry

@@ -26,6 +26,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--nif", help="NIF weights for the nif and scf rows (default: the shipped field); Table III")
     p.add_argument("--no-center-grasp", dest="center_grasp", action="store_false",
                    help="judge the methods' grasps as predicted, not centred between the fingers (README)")
+    p.add_argument("--no-feasibility", dest="feasible", action="store_false",
+                   help="take each template method's lowest-loss poses even where the fingers would close on "
+                        "nothing or the place turns the object over relative to the grasp (README)")
     from app.nift.imitation_config import ImitationConfig
 
     p.add_argument("--place-contact-scale", type=float, default=ImitationConfig.place_contact_scale,
@@ -64,7 +67,7 @@ def run(args: argparse.Namespace) -> int:
             raise ValueError(f"unknown pose setting {pose!r}; choose from {', '.join(POSES)}")
     methods = tuple(m if m == ORACLE else check_method(m) for m in _names(args.methods))
     config = BenchConfig(tasks, poses, methods, args.trials, args.demos, args.camera, args.setting, args.seed,
-                         args.nif, center_grasp=args.center_grasp,
+                         args.nif, center_grasp=args.center_grasp, feasible=args.feasible,
                          place_contact_scale=args.place_contact_scale)
     with tqdm(unit="trial", desc="bench", disable=args.json) as bar:
         def progress(done: int, total: int) -> None:

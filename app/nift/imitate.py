@@ -26,6 +26,10 @@ taken over a fixed random subset of `explore_points` template points, then over 
 (refinement). Both cut the work where it was spent: 10 initialisations x 500 points for the first
 steps. Every initialisation's final pose is scored on all points before the best is chosen.
 
+Optional `feasible` (our addition): a predicate on poses (K, 4, 4) -> (K,) bool from the caller
+(e.g. "the fingers would close on something"); pruning drops infeasible initialisations first and
+the lowest-loss feasible pose wins (the lowest-loss one when none is feasible).
+
 Rotation parametrisation: the continuous 6-D representation of Zhou et al.
 (CVPR 2019) - two columns, Gram-Schmidt - which has no singularity anywhere, 180 degrees included
 (axis-angle and quaternions wrap or double-cover there).
@@ -33,6 +37,7 @@ Rotation parametrisation: the continuous 6-D representation of Zhou et al.
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from contextlib import contextmanager
 from dataclasses import dataclass
 
@@ -56,6 +61,10 @@ class Imitation:
     best: int
     iterations: int
     seconds: float
+    feasible: np.ndarray | None = None  # (inits,) the caller's predicate at the final poses, if given
+
+
+Feasible = Callable[[np.ndarray], np.ndarray]  # poses (K, 4, 4) -> (K,) bool
 
 
 def rotation_from_6d(r6: torch.Tensor) -> torch.Tensor:
@@ -112,19 +121,28 @@ def frozen(module: torch.nn.Module):
 
 
 def imitate(template: Template, cloud: np.ndarray, config: ImitationConfig = ImitationConfig(),
-            field: NeuralField | None = None) -> Imitation:
-    """Optimise Eq. 5 for a target cloud (N, 3); `field` defaults to the template's shipped field."""
+            field: NeuralField | None = None, feasible: Feasible | None = None) -> Imitation:
+    """Optimise Eq. 5 for a target cloud (N, 3); `field` defaults to the template's shipped field;
+    `feasible` (optional) rules poses out, see the module doc."""
     cloud = np.asarray(cloud, dtype=np.float64)
     if cloud.ndim != 2 or cloud.shape[1] != 3 or len(cloud) < 16:
         raise ValueError(f"the target cloud must be (N, 3) with N >= 16, got shape {cloud.shape}")
     start = time.perf_counter()
     field = field or load_field(FEATURES[template.feature])
     with frozen(field):
-        return _optimise(template, cloud, config, field, start)
+        return _optimise(template, cloud, config, field, start, feasible)
+
+
+def _poses(r6: torch.Tensor, t: torch.Tensor, c_X: torch.Tensor, c_O: torch.Tensor) -> np.ndarray:
+    """(I, 4, 4) float64 poses T x = R (x - c_X) + c_O + t of the parameters (I, 6), (I, 3)."""
+    with torch.no_grad():
+        R = rotation_from_6d(r6)
+        trans = c_O + t - torch.einsum("iab,b->ia", R, c_X)
+    return np.stack([make_pose(R[i].double().numpy(), trans[i].double().numpy()) for i in range(len(R))])
 
 
 def _optimise(template: Template, cloud: np.ndarray, config: ImitationConfig, field: NeuralField,
-              start: float) -> Imitation:
+              start: float, feasible: Feasible | None = None) -> Imitation:
     """The loop of `imitate` (the field's parameters frozen)."""
     rng = np.random.default_rng(config.seed)
     X = torch.as_tensor(template.points, dtype=torch.float32)  # (M, 3)
@@ -168,7 +186,10 @@ def _optimise(template: Template, cloud: np.ndarray, config: ImitationConfig, fi
         if stale >= config.patience:
             break
         if config.prune_every and iterations % config.prune_every == 0 and len(alive) > config.keep:
-            keep = torch.argsort(current)[:max(config.keep, len(alive) // 2)]
+            rank = current.clone()
+            if feasible is not None:  # infeasible ones are dropped first
+                rank[torch.as_tensor(~feasible(_poses(r6, t, c_X, c_O)))] = float("inf")
+            keep = torch.argsort(rank)[:max(config.keep, len(alive) // 2)]
             final_r6[alive], final_t[alive] = r6.detach(), t.detach()  # the dropped ones keep these
             alive = alive[keep]
             (r6, t), opt = _subset(opt, [r6, t], keep)
@@ -177,10 +198,9 @@ def _optimise(template: Template, cloud: np.ndarray, config: ImitationConfig, fi
                 best[alive] = float("inf")
     with torch.no_grad():
         final_r6[alive], final_t[alive] = r6, t
-        final = losses(final_r6, final_t)  # every initialisation scored on all points, so they compare
-        R = rotation_from_6d(final_r6)
-        trans = c_O + final_t - torch.einsum("iab,b->ia", R, c_X)
-    poses = np.stack([make_pose(R[i].double().numpy(), trans[i].double().numpy()) for i in range(config.inits)])
-    k = int(torch.argmin(final))
-    return Imitation(poses[k], poses, final.numpy().astype(np.float64), k, iterations, time.perf_counter() - start)
+        final = losses(final_r6, final_t).numpy().astype(np.float64)  # every init on all points: they compare
+    poses = _poses(final_r6, final_t, c_X, c_O)
+    ok = feasible(poses) if feasible is not None else None
+    k = int(np.argmin(np.where(ok, final, np.inf))) if ok is not None and ok.any() else int(np.argmin(final))
+    return Imitation(poses[k], poses, final, k, iterations, time.perf_counter() - start, ok)
 

@@ -1,0 +1,50 @@
+"""Feasibility of imitated poses (our addition): predicates `app.nift.imitate` uses to rank its
+initialisations, so the lowest-loss pose a robot could actually carry out wins.
+
+Grasp: the fingers must close on something - at least GRIP_POINTS cloud points in the volume they
+sweep (bottles in arbitrary poses: a quarter of the best grasps closed on nothing).
+
+Place: consistent with the grasp. The grasp and the place are imitated separately (paper Sec.
+III-C), so nothing stops a place that turns the object over relative to the grasp: on bottles seen in arbitrary poses the place
+template's best pose puts the bottle upside down in a third of the trials (`nift bench`), which
+no robot could then carry out with that grasp - the gripper would have to come up through the
+shelf. With a rigid grasp, the gripper's pose at the place in the fixture's frame is
+
+    T_fixture_tcp = inv(T_base_fixture_seen) @ T_base_tcp
+
+and in every demo the TCP sat at some height above the fixture's origin. A candidate is consistent
+when some demo's height is within `CARRY_TOLERANCE` of its own. Height is unchanged by turning about
+the fixture's vertical axis (any yaw on the shelf is as good as another) and, within the tolerance,
+by grasping a rim at another azimuth than the demos did; an object turned over moves the grasp by
+most of the object's height (a bottle's neck grasp: ~12 cm). Measured on the first 20 bench trials:
+bottles arbitrary place 0.65 -> 0.85. A tolerance of 4 cm with the approach axis's tilt also
+checked (30 degrees) cost mug places (0.40 -> 0.10 arbitrary): a mug grasped elsewhere on its rim
+hangs with the gripper at another tilt.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from app.grasp_centering import swept_points
+from app.se3 import invert
+
+GRIP_POINTS = 20  # a grasp closes on something when at least this many cloud points lie between the fingers
+CARRY_TOLERANCE = 0.06  # metres: a carried grasp this close in height to some demo's is consistent
+
+
+def carried_height(T_fixture_tcp: np.ndarray) -> float:
+    """Height of the TCP above the fixture's origin, along the fixture's z (up)."""
+    return float(T_fixture_tcp[2, 3])
+
+
+def grips_something(cloud: np.ndarray, min_points: int = GRIP_POINTS):
+    """Predicate on grasp poses (K, 4, 4) in the cloud's frame: enough points between the fingers."""
+    return lambda poses: np.array([len(swept_points(T, cloud)) >= min_points for T in poses])
+
+
+def carries_like_demos(T_base_tcp: np.ndarray, demos: list[np.ndarray], tolerance: float = CARRY_TOLERANCE):
+    """Predicate on place poses (K, 4, 4) (T_base_fixture_seen): the grasp T_base_tcp carried there
+    is within `tolerance` in height of some demo's T_fixture_tcp."""
+    heights = np.array([carried_height(T) for T in demos])  # (D,)
+    return lambda poses: np.array([np.abs(carried_height(invert(T) @ T_base_tcp) - heights).min() <= tolerance
+                                   for T in poses])

@@ -1,0 +1,32 @@
+"""Feasibility of imitated poses: the two predicates on known geometry, and imitation honouring a predicate."""
+import numpy as np
+
+from app.feasibility import GRIP_POINTS, carries_like_demos, grips_something
+from app.se3 import invert, make_pose, random_rotations, rotvec_to_matrix
+
+
+def test_a_grasp_grips_something_only_with_points_between_the_fingers():
+    rng = np.random.default_rng(0)
+    T = make_pose(random_rotations(1, rng)[0], [0.4, 0.1, 0.2])
+    wall = rng.uniform([-0.005, -0.004, -0.01], [0.005, 0.004, 0.01], size=(200, 3))  # a slab at the TCP
+    cloud = wall @ T[:3, :3].T + T[:3, 3]
+    away = T @ make_pose(np.eye(3), [0.0, 0.0, -0.10])  # 10 cm back along the approach: fingers in the air
+    sideways = T @ make_pose(np.eye(3), [0.10, 0.0, 0.0])  # beside the fingers
+    assert grips_something(cloud)(np.stack([T, away, sideways])).tolist() == [True, False, False]
+    few = cloud[:GRIP_POINTS - 1]
+    assert not grips_something(few)(T[None])[0]
+
+
+def test_a_place_that_turns_the_object_over_relative_to_the_grasp_is_not_carried_like_the_demos():
+    """A bottle held at its neck, 17 cm above its base: the demos set it on the shelf with the TCP 17 cm
+    above the fixture; the same place turned over puts the TCP 17 cm lower than the object's top."""
+    T_obj_tcp = make_pose(np.eye(3), [0.0, 0.0, 0.17])  # the grasp, in the object's frame
+    T_fixture_obj = make_pose(np.eye(3), [0.0, 0.0, 0.003])  # upright on the board
+    demos = [T_fixture_obj @ T_obj_tcp]  # each demo's T_fixture_tcp
+    T_base_obj = make_pose(random_rotations(1, np.random.default_rng(1))[0], [0.5, 0.0, 0.3])
+    T_base_tcp = T_base_obj @ T_obj_tcp
+    upright = T_base_obj @ invert(T_fixture_obj)  # T_base_fixture_seen of the demo's place
+    yawed = T_base_obj @ invert(make_pose(rotvec_to_matrix([0, 0, 2.0]), [0.05, -0.03, 0.003]))  # elsewhere on the board
+    flip = make_pose(rotvec_to_matrix([np.pi, 0, 0]), [0.0, 0.0, 0.22])  # upside down, top (22 cm) on the board
+    over = T_base_obj @ invert(flip)
+    assert carries_like_demos(T_base_tcp, demos)(np.stack([upright, yawed, over])).tolist() == [True, True, False]
