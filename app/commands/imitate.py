@@ -21,6 +21,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     add_imitation_arguments(p)
     p.add_argument("--no-center-grasp", dest="center_grasp", action="store_false",
                    help="the grasp as the optimisation found it, not centred between the fingers")
+    p.add_argument("--no-feasibility", dest="feasible", action="store_false",
+                   help="the lowest-loss poses even if the fingers close on nothing or the place turns the object over")
     p.add_argument("--json", action="store_true", help="print the poses and losses as JSON")
 
 
@@ -35,7 +37,7 @@ def run(args: argparse.Namespace) -> int:
 
     cloud = load_cloud(args.cloud)
     pred = predict(task(args.task), cloud, args.method, directory=args.demos, config=imitation_config(args),
-                   center=args.center_grasp)
+                   center=args.center_grasp, feasible=args.feasible)
     if args.json:
         print(json.dumps(pred.record(), indent=2))
         return 0
