@@ -113,8 +113,7 @@ def run_job(t: Task, arm: Arm, gripper: Gripper, camera: DepthCamera, T_base_cam
     if predictor is None:
         def predictor(cloud: np.ndarray) -> Prediction:
             return predict(t, cloud, config.method, T_base_fixture, config.demos, config.imitation,
-                           center=config.center_grasp,
-                           feasible=config.feasible)
+                           center=config.center_grasp, feasible=config.feasible)
     try:
         _run(t, arm, gripper, camera, T_base_cam, T_base_fixture, scene, config, hooks, predictor, result)
         result.arm = "home"

@@ -120,3 +120,12 @@ def test_a_feasibility_predicate_rules_poses_out_and_only_a_predicate_nothing_pa
     assert ruled.feasible.tolist() == far(ruled.poses).tolist()
     nothing = imitate(template, cloud, config, feasible=lambda poses: np.zeros(len(poses), bool))
     assert nothing.best == int(np.argmin(nothing.losses)) and not nothing.feasible.any()
+
+
+def test_a_negative_or_nan_contact_scale_is_refused_in_one_line():
+    for bad in (-0.01, float("nan")):
+        with pytest.raises(ValueError, match="place_contact_scale must be >= 0"):
+            ImitationConfig(place_contact_scale=bad)
+    with pytest.raises(ValueError, match="grasp_contact_scale must be >= 0"):
+        ImitationConfig(grasp_contact_scale=-1.0)
+    assert ImitationConfig(place_contact_scale=0.0).contact_scale("rack") == 0.0

@@ -58,6 +58,7 @@ class BenchConfig:
             raise ValueError(f"unknown setting {self.setting!r}; choose one of {', '.join(SETTINGS)}")
         if self.trials < 1 or not 1 <= self.demos <= 10:
             raise ValueError(f"--trials must be >= 1 and --demos 1..10 (got {self.trials}, {self.demos})")
+        self.imitation(0)  # a bad --place-contact-scale fails here, in one line, not in the workers
         if self.nif is not None and self.setting == "executed":
             raise ValueError("--nif applies to the teleported setting only (jobs use the shipped field)")
 

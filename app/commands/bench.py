@@ -11,6 +11,8 @@ QUICK = {"trials": 2, "methods": "cpd,ibs-nif", "poses": "upright"}
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
+    from app.nift.imitation_config import ImitationConfig
+
     p.add_argument("--tasks", default="mug,bowl,bottle",
                    help="comma list: mug, bowl, bottle, and the out-of-domain bowl-demos-on-mug, bottle-demos-on-vase")
     p.add_argument("--poses", default="upright,arbitrary", help="comma list: upright, arbitrary")
@@ -29,8 +31,6 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--no-feasibility", dest="feasible", action="store_false",
                    help="take each template method's lowest-loss poses even where the fingers would close on "
                         "nothing or the place turns the object over relative to the grasp (README)")
-    from app.nift.imitation_config import ImitationConfig
-
     p.add_argument("--place-contact-scale", type=float, default=ImitationConfig.place_contact_scale,
                    help="metres: weight place template points by exp(-d / scale), d their distance to the rack or "
                         f"shelf (default {ImitationConfig.place_contact_scale}; 0: the paper's plain mean; README)")

@@ -32,6 +32,11 @@ class ImitationConfig:
     place_contact_scale: float = 0.01  # metres, for templates of a fixture (rack, shelf)
     seed: int = 0
 
+    def __post_init__(self) -> None:
+        for name in ("grasp_contact_scale", "place_contact_scale"):
+            if not getattr(self, name) >= 0.0:  # also NaN
+                raise ValueError(f"{name} must be >= 0 metres (0: the paper's plain mean), got {getattr(self, name)}")
+
     def contact_scale(self, anchor: str) -> float:
         """The contact weighting scale for a template of this anchor."""
         return self.grasp_contact_scale if anchor == "gripper" else self.place_contact_scale
