@@ -41,7 +41,7 @@ class JobConfig:
     release_clearance: float = 0.02  # m the fingers open beyond the held width to let go: opening fully
     # inside a bowl swept the far finger into its wall and dragged it off the shelf on the retreat
     demos: Path | None = None  # task directory (default demos/<task>)
-    center_grasp: bool = True  # centre the predicted grasp between the fingers (app.grasp_centering)
+    center_grasp: bool = True  # centre the grasp between the fingers and a hang on the peg (app.grasp_centering, app.peg_centering)
     feasible: bool = True  # prefer grasps that close on something and places the grasp can carry to (app.feasibility)
     perception: PerceptionConfig = PerceptionConfig()
     imitation: ImitationConfig = ImitationConfig()

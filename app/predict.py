@@ -13,8 +13,9 @@ imitation, Eq. 5), "nift" = "ibs-nif", and "cpd" (demo registration). Every meth
 
 Template methods rank their candidate poses by feasibility first (`app.feasibility`, our addition):
 a grasp must close on cloud points, a place must be one the grasp could carry the object to as in
-the demos. The grasp is then centred on the cloud points between the fingers (`app.grasp_centering`,
-our addition). Both on by default, for every method alike.
+the demos. Then both poses are centred on the cloud (our addition): the grasp on the points between
+the fingers (`app.grasp_centering`), a hang on the peg in the middle of the hole's gap
+(`app.peg_centering`; fixtures without a peg are left alone). On by default, for every method alike.
 """
 from __future__ import annotations
 
@@ -28,6 +29,8 @@ from app.feasibility import carries_like_demos, grips_something
 from app.grasp_centering import center_grasp
 from app.nift.cpd import best_registration
 from app.methods import check_method
+from app.objects import fixture
+from app.peg_centering import center_on_peg
 from app.nift.field import load_field
 from app.nift.imitate import ImitationConfig, imitate
 from app.nift.template import FEATURES, nif_override
@@ -66,10 +69,14 @@ def predict(t: Task, cloud: np.ndarray, method: str = "nift", T_base_fixture: np
             nif: str | Path | None = None, center: bool = True, feasible: bool = True) -> Prediction:
     """Grasp pose and place motion for a target cloud (N, 3) in the base frame (`nif`: NIF weights for
     the nif and scf features, default the shipped ones; `center`: centre the grasp on the points
-    between the fingers, `app.grasp_centering`; `feasible`: prefer feasible poses, `app.feasibility`)."""
+    between the fingers and a hang on the peg, `app.grasp_centering` and `app.peg_centering`;
+    `feasible`: prefer feasible poses, `app.feasibility`)."""
     pred = _predict(t, cloud, method, T_base_fixture, directory, config, nif, feasible)
     if center:
         pred.T_base_tcp = center_grasp(pred.T_base_tcp, cloud)
+        seen = center_on_peg(pred.T_base_fixture_seen, cloud, fixture(t.fixture))
+        pred.motion = pred.motion @ pred.T_base_fixture_seen @ invert(seen)  # T_base_fixture @ inv(seen)
+        pred.T_base_fixture_seen = seen
     return pred
 
 

@@ -41,7 +41,7 @@ class BenchConfig:
     setting: str = "teleported"
     seed: int = 0
     nif: str | None = None  # NIF weights for the nif and scf rows (None: the shipped field); Table III
-    center_grasp: bool = True  # centre every method's grasp between the fingers (app.grasp_centering)
+    center_grasp: bool = True  # centre every method's grasp between the fingers and hang on the peg (app.grasp_centering, app.peg_centering)
     feasible: bool = True  # rank template methods' candidate poses by feasibility first (app.feasibility)
     place_contact_scale: float = ImitationConfig.place_contact_scale  # contact weighting of place templates; 0: the paper's
     cell: CellConfig = field(default_factory=CellConfig)

@@ -26,8 +26,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="teleported: the paper's judges; executed: whole jobs through IK, trajectories and the gripper")
     p.add_argument("--seed", type=int, default=0, help="the run's seed (objects, poses, noise, initialisations)")
     p.add_argument("--nif", help="NIF weights for the nif and scf rows (default: the shipped field); Table III")
-    p.add_argument("--no-center-grasp", dest="center_grasp", action="store_false",
-                   help="judge the methods' grasps as predicted, not centred between the fingers (README)")
+    p.add_argument("--no-centering", "--no-center-grasp", dest="center_grasp", action="store_false",
+                   help="judge the methods' poses as predicted: grasps not centred between the fingers, "
+                        "hangs not centred on the peg (README)")
     p.add_argument("--no-feasibility", dest="feasible", action="store_false",
                    help="take each template method's lowest-loss poses even where the fingers would close on "
                         "nothing or the place turns the object over relative to the grasp (README)")

@@ -19,8 +19,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--demos", type=Path, help="task directory (default demos/<task>)")
     p.add_argument("--seed", type=int, default=0, help="initial rotations and translations")
     add_imitation_arguments(p)
-    p.add_argument("--no-center-grasp", dest="center_grasp", action="store_false",
-                   help="the grasp as the optimisation found it, not centred between the fingers")
+    p.add_argument("--no-centering", "--no-center-grasp", dest="center_grasp", action="store_false",
+                   help="the poses as the optimisation found them: the grasp not centred between the "
+                        "fingers, a hang not centred on the peg")
     p.add_argument("--no-feasibility", dest="feasible", action="store_false",
                    help="the lowest-loss poses even if the fingers close on nothing or the place turns the object over")
     p.add_argument("--json", action="store_true", help="print the poses and losses as JSON")
