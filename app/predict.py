@@ -75,8 +75,9 @@ def predict(t: Task, cloud: np.ndarray, method: str = "nift", T_base_fixture: np
     if center:
         pred.T_base_tcp = center_grasp(pred.T_base_tcp, cloud)
         seen = center_on_peg(pred.T_base_fixture_seen, cloud, fixture(t.fixture))
-        pred.motion = pred.motion @ pred.T_base_fixture_seen @ invert(seen)  # T_base_fixture @ inv(seen)
-        pred.T_base_fixture_seen = seen
+        if not np.array_equal(seen, pred.T_base_fixture_seen):  # unmoved (the shelf): keep the motion bit for bit
+            pred.motion = pred.motion @ pred.T_base_fixture_seen @ invert(seen)  # T_base_fixture @ inv(seen)
+            pred.T_base_fixture_seen = seen
     return pred
 
 
