@@ -20,7 +20,7 @@ from __future__ import annotations
 import numpy as np
 
 from app.objects import Fixture
-from app.se3 import invert, make_pose
+from app.se3 import invert, make_pose, transform_points
 
 LANE = 0.004  # metres: half-height of the lane level with the peg's axis
 REACH = 0.06  # metres: how far along e_2 the lane reaches either side of the peg
@@ -56,7 +56,5 @@ def center_on_peg(T_base_fixture_seen: np.ndarray, cloud: np.ndarray, fx: Fixtur
     its peg's e_2 so the peg runs through the middle of the hole's gap; unchanged without a peg."""
     if "peg_origin" not in fx.landmarks:
         return T_base_fixture_seen.copy()
-    T_fixture_base = invert(T_base_fixture_seen)
-    cloud_fixture = np.asarray(cloud, float) @ T_fixture_base[:3, :3].T + T_fixture_base[:3, 3]
-    shift = peg_shift(cloud_fixture, fx)
+    shift = peg_shift(transform_points(invert(T_base_fixture_seen), cloud), fx)
     return T_base_fixture_seen @ make_pose(np.eye(3), shift * peg_frame(fx)[3])
