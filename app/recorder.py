@@ -12,6 +12,7 @@ Layout of a task's directory (`demos/<task>/`): demo-NN.npz (nift-demo/1), and
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 from pathlib import Path
 from typing import Callable
 
@@ -22,7 +23,7 @@ from app.cell import SimCell
 from app.demo import Demo, load_demo, save_demo
 from app.judges import judge_grasp, judge_place
 from app.nift.template import (StaleTemplate, Template, build_template, field_id, load_template, nif_override,
-                               save_template)
+                               save_template, with_demo_features)
 from app.objects import split
 from app.perception import object_cloud
 from app.spawn import spawn
@@ -110,27 +111,41 @@ def build_task_templates(t: Task, demos: list[Demo], query: str = "ibs", feature
     """The grasp and place templates of a task from its demos (`nif`: NIF weights, default shipped)."""
     anchors = {"grasp": "gripper", "place": t.fixture}
     weights = nif_override(feature, nif)
-    out = {}
-    for stage in STAGES:
-        frames = [{"cloud": d.cloud, "name": d.name,
-                   "T_frame_anchor": d.grasp_anchor() if stage == "grasp" else d.place_anchor()} for d in demos]
-        out[stage] = build_template(anchors[stage], anchor_mesh(anchors[stage]), frames, query, feature, n_points,
-                                    weights=weights, seed=seed)
-    return out
+    return {stage: build_template(anchors[stage], anchor_mesh(anchors[stage]), template_frames(demos, stage), query,
+                                  feature, n_points, weights=weights, seed=seed) for stage in STAGES}
+
+
+def template_frames(demos: list[Demo], stage: str) -> list[dict]:
+    """The demos as `build_template` takes them for a stage: cloud, name and the anchor's pose."""
+    return [{"cloud": d.cloud, "name": d.name,
+             "T_frame_anchor": d.grasp_anchor() if stage == "grasp" else d.place_anchor()} for d in demos]
+
+
+@lru_cache(maxsize=8)
+def _with_demo_features(path: Path, stamp: int, directory: Path, stage: str, weights: str | Path | None) -> Template:
+    """A saved template with its demos' own features, once per process and file version (`stamp`):
+    they take one encoding per demo (~0.2 s each on a CPU) and are not saved."""
+    return with_demo_features(load_template(path, weights), template_frames(task_demos(directory), stage), weights)
 
 
 def task_templates(t: Task, directory: Path | None = None, query: str = "ibs", feature: str = "nif",
-                   rebuild: bool = False, nif: str | Path | None = None) -> dict[str, Template]:
+                   rebuild: bool = False, nif: str | Path | None = None,
+                   per_demo: tuple[str, ...] = ()) -> dict[str, Template]:
     """A task's templates from its directory, built from the demos (and saved) when missing, built
-    with other field weights, or asked."""
+    with other field weights, or asked; those of the stages `per_demo` with each demo's own features
+    (`Template.per_demo`)."""
     directory = directory or DEMOS_DIR / t.demos
     weights = nif_override(feature, nif)
     paths = {s: template_path(directory, s, query, feature, weights) for s in STAGES}
     if not rebuild and all(p.is_file() for p in paths.values()):
         try:
-            return {s: load_template(p, weights) for s, p in paths.items()}
+            templates = {s: load_template(p, weights) for s, p in paths.items()}
         except StaleTemplate:  # the weights changed since: the demos are the source, rebuild
             pass
+        else:
+            for s in per_demo:
+                templates[s] = _with_demo_features(paths[s], paths[s].stat().st_mtime_ns, directory, s, weights)
+            return templates
     templates = build_task_templates(t, task_demos(directory), query, feature, nif=weights)
     for stage, template in templates.items():
         save_template(template, paths[stage])

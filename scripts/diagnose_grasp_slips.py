@@ -40,7 +40,7 @@ for i in range(first, last):
     for k in ([found.best] + [k for k in np.argsort(found.losses) if k != found.best])[:6]:
         T = center_grasp(found.poses[k], cloud)
         between = swept_points(T, cloud)
-        verdict = bench._judge(obj, T_base_obj, pose, lambda o: judge_grasp(bench.world, o, T))
+        verdict = bench.judge_copy(obj, T_base_obj, pose, lambda o: judge_grasp(bench.world, o, T))
         mark = "O" if verdict.success else ("s" if "slipped" in verdict.reason else ".")
         depth = 1000 * np.ptp(between[:, 2]) if len(between) else 0.0
         marks.append(f"{mark} loss {found.losses[k]:.0f} n {len(between)} d {depth:.0f}")

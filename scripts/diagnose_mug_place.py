@@ -10,15 +10,13 @@ import sys
 import numpy as np
 
 from app.bench.imitation import target
-from app.cell import CellConfig, add_fixtures
-from app.judges import judge_place
+from app.cell import CellConfig
 from app.nift.imitate import ImitationConfig, imitate
 from app.objects import fixture, semantics, split
 from app.recorder import task_templates
 from app.se3 import invert
-from app.spawn import spawn
 from app.tasks import task
-from hardware.sim.world import SimWorld, SimWorldConfig
+from rack_judge import RackJudge
 
 scale_m = float(sys.argv[1]) if len(sys.argv) > 1 else 0.01
 n = int(sys.argv[2]) if len(sys.argv) > 2 else 20
@@ -26,10 +24,7 @@ t, cell = task("mug"), CellConfig()
 template = task_templates(t)["place"]
 peg = fixture("rack").landmarks
 origin, direction = np.array(peg["peg_origin"]), np.array(peg["peg_direction"])
-world = SimWorld(SimWorldConfig())
-world.connect()
-rack_body = add_fixtures(world, cell)["rack"]
-T_base_rack = cell.fixture_pose("rack")
+rack = RackJudge(cell)
 rng = np.random.default_rng(5)
 held = 0
 for seed in split("mug", "test")[:n]:
@@ -39,9 +34,7 @@ for seed in split("mug", "test")[:n]:
     hole = T_rack_obj[:3, :3] @ (np.array(semantics(mesh).handle_center) * scale) + T_rack_obj[:3, 3]
     v = hole - origin
     off_peg = np.linalg.norm(v - (v @ direction) * direction)  # distance of the hole's centre from the peg's axis
-    obj = spawn(world, "mug", seed, "upright", scale=scale, T_world_obj=T_base_obj)
-    verdict = judge_place(world, obj, T_base_rack @ T_rack_obj, rack_body, upright=False)
-    world.remove(obj.body)
+    verdict = rack.verdict(seed, scale, T_base_obj, T_rack_obj)
     held += verdict.success
     print(f"mug {seed}: handle hole {1000 * off_peg:5.1f} mm off the peg; {verdict.reason}", flush=True)
 print(f"contact scale {scale_m} m: {held} of {n} hang")

@@ -10,35 +10,21 @@ import sys
 import numpy as np
 
 from app.bench.imitation import target
-from app.cell import CellConfig, add_fixtures
-from app.judges import judge_place
+from app.cell import CellConfig
 from app.nift.imitate import ImitationConfig, imitate
 from app.objects import fixture, semantics, split
 from app.peg_centering import center_on_peg, peg_frame
 from app.recorder import task_templates
 from app.se3 import invert, transform_points
-from app.spawn import spawn
 from app.tasks import task
-from hardware.sim.world import SimWorld, SimWorldConfig
+from rack_judge import RackJudge
 
 first, last = (int(sys.argv[1]), int(sys.argv[2])) if len(sys.argv) > 2 else (0, 20)
 t, cell, rack = task("mug"), CellConfig(), fixture("rack")
 template = task_templates(t)["place"]
 o, d, e1, e2 = peg_frame(rack)
-world = SimWorld(SimWorldConfig())
-world.connect()
-rack_body = add_fixtures(world, cell)["rack"]
-T_base_rack = cell.fixture_pose("rack")
+judge = RackJudge(cell)
 rng = np.random.default_rng(5)
-
-
-def hangs(seed: int, scale: float, T_base_obj: np.ndarray, T_rack_obj: np.ndarray) -> bool:
-    obj = spawn(world, "mug", seed, "upright", scale=scale, T_world_obj=T_base_obj)
-    verdict = judge_place(world, obj, T_base_rack @ T_rack_obj, rack_body, upright=False)
-    world.remove(obj.body)
-    return verdict.success
-
-
 counts = np.zeros(2, int)
 for i, seed in enumerate(split("mug", "test")[:last]):
     mesh, T_base_obj, cloud, scale = target("mug", seed, rng, cell)  # drawn for every i: the same mugs
@@ -48,7 +34,7 @@ for i, seed in enumerate(split("mug", "test")[:last]):
     poses = [invert(T) @ T_base_obj for T in (seen, center_on_peg(seen, cloud, rack))]  # T_rack_obj
     hole = np.array(semantics(mesh).handle_center) * scale
     side = [1000 * (transform_points(T, hole[None])[0] - o) @ e2 for T in poses]
-    ok = [hangs(seed, scale, T_base_obj, T) for T in poses]
+    ok = [judge.hangs(seed, scale, T_base_obj, T) for T in poses]
     counts += ok
     print(f"mug {seed}: hole {side[0]:+5.1f} -> {side[1]:+5.1f} mm along e2 from the peg; hangs {ok[0]} -> {ok[1]}", flush=True)
 print(f"mugs {first}..{last - 1}: {counts[0]} hang as imitated, {counts[1]} after peg centring")

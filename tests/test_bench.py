@@ -88,6 +88,19 @@ def test_other_settings_in_the_same_directory_are_refused(tmp_path):
         run(BenchConfig(tasks=("bowl",), poses=("upright",), methods=(ORACLE,), trials=1), tmp_path, workers=1)
 
 
+def test_a_run_made_before_a_setting_existed_resumes_as_its_old_value_and_only_as_that(tmp_path):
+    """run.json files from before `place_demo_match` lack it: they ran the mean, so that resumes them."""
+    from app.bench.runner import ADDED, prepare, settings
+
+    config = BenchConfig(tasks=("mug",), methods=("cpd",), trials=1)
+    older = {k: v for k, v in settings(config).items() if k not in ADDED}
+    (tmp_path / "run.json").write_text(json.dumps(older))
+    prepare(replace(config, place_demo_match="mean"), tmp_path)
+    (tmp_path / "run.json").write_text(json.dumps(older))
+    with pytest.raises(ValueError, match="other settings"):
+        prepare(replace(config, place_demo_match="nearest"), tmp_path)
+
+
 def test_fused_cameras_see_more_of_the_object_than_the_cells_one():
     from scipy.spatial import cKDTree
 

@@ -129,3 +129,45 @@ def test_a_negative_or_nan_contact_scale_is_refused_in_one_line():
     with pytest.raises(ValueError, match="grasp_contact_scale must be >= 0"):
         ImitationConfig(grasp_contact_scale=-1.0)
     assert ImitationConfig(place_contact_scale=0.0).contact_scale("rack") == 0.0
+
+
+@pytest.fixture(scope="module")
+def two_demos(demo):
+    """A place template from two mugs (the `demo` one, A, and another, B) and their frames."""
+    cloud, stages = demo
+    other_cloud, _, T_b = demo_scene(seed=5)
+    frames = [{"cloud": cloud, "T_frame_anchor": stages["place"][1]}, {"cloud": other_cloud, "T_frame_anchor": T_b}]
+    return build_template("rack", anchor_mesh("rack"), frames), frames
+
+
+def test_nearest_demo_matching_scores_a_demo_at_its_own_place_zero_unlike_the_mean(two_demos):
+    """At demo A's own place on A's own cloud A's features are met exactly: the nearest-demo loss is 0
+    (float rounding), the loss against the two mugs' mean is not; and the loss is what imitate reports."""
+    from app.nift.imitate import losses_at
+
+    template, frames = two_demos
+    cloud, T_a = frames[0]["cloud"], frames[0]["T_frame_anchor"]
+    assert template.per_demo.shape == (2, *template.features.shape)
+    assert np.allclose(template.per_demo.mean(axis=0), template.features)
+    nearest, mean = (losses_at(template, cloud, T_a[None], ImitationConfig(place_demo_match=m))[0] for m in ("nearest", "mean"))
+    assert nearest < 1e-3 * mean, (nearest, mean)
+    config = ImitationConfig(inits=4, iterations=30, seed=1, place_demo_match="nearest")
+    result = imitate(template, cloud, config)
+    assert np.allclose(result.losses, losses_at(template, cloud, result.poses, config), rtol=1e-4)
+
+
+def test_per_demo_features_are_not_saved_and_come_back_from_the_same_demos_only(two_demos, tmp_path):
+    from app.nift.imitate import losses_at
+    from app.nift.template import load_template, save_template, with_demo_features
+
+    template, frames = two_demos
+    loaded = load_template(save_template(template, tmp_path / "place.nit.npz"))
+    assert loaded.per_demo is None
+    with pytest.raises(ValueError, match="nearest demo needs each demo's features"):
+        losses_at(loaded, frames[0]["cloud"], np.eye(4)[None], ImitationConfig(place_demo_match="nearest"))
+    back = with_demo_features(loaded, frames)
+    assert np.allclose(back.per_demo, template.per_demo, rtol=1e-4, atol=1e-4)  # points are saved as float32
+    with pytest.raises(ValueError, match="was built from demos"):
+        with_demo_features(loaded, frames[:1])
+    with pytest.raises(ValueError, match="unknown place_demo_match 'closest'"):
+        ImitationConfig(place_demo_match="closest")

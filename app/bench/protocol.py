@@ -44,11 +44,12 @@ class BenchConfig:
     center_grasp: bool = True  # centre every method's grasp between the fingers and hang on the peg (app.grasp_centering, app.peg_centering)
     feasible: bool = True  # rank template methods' candidate poses by feasibility first (app.feasibility)
     place_contact_scale: float = ImitationConfig.place_contact_scale  # contact weighting of place templates; 0: the paper's
+    place_demo_match: str = ImitationConfig.place_demo_match  # place poses against the demos' mean features or the nearest demo's
     cell: CellConfig = field(default_factory=CellConfig)
 
     def imitation(self, index: int) -> ImitationConfig:
         """The optimiser settings of trial `index` (its seed is the index, as for every method)."""
-        return ImitationConfig(seed=index, place_contact_scale=self.place_contact_scale)
+        return ImitationConfig(seed=index, place_contact_scale=self.place_contact_scale, place_demo_match=self.place_demo_match)
 
     def check(self) -> None:
         """A one-line error for a setting this benchmark does not know."""

@@ -25,6 +25,7 @@ from app.recorder import DEMOS_DIR, task_templates
 from app.tasks import task
 
 FORMAT = "nift-bench/1"
+ADDED = {"place_demo_match": "mean"}  # settings added since the format, with the value runs made before them had
 _worker = None  # the per-process bench (a world, or the sim cell), made by _init_worker
 
 
@@ -47,7 +48,7 @@ def prepare(config: BenchConfig, out: Path) -> Path:
     run_file = out / "run.json"
     wanted = json.loads(json.dumps(settings(config)))
     if run_file.exists():
-        earlier = json.loads(run_file.read_text())
+        earlier = {**ADDED, **json.loads(run_file.read_text())}  # an older run: what it did then
         if {**earlier, "trials": None} != {**wanted, "trials": None}:
             raise ValueError(f"{out} holds results of a run with other settings; choose another --out")
         if config.trials < earlier["trials"]:

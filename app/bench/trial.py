@@ -63,9 +63,9 @@ class TeleportedBench:
                              "why": f"no prediction: {exc}", "seconds": round(time.perf_counter() - start, 2)})
                 continue
             seconds = time.perf_counter() - start
-            grasp = self._judge(obj, T_base_obj, trial.pose,
+            grasp = self.judge_copy(obj, T_base_obj, trial.pose,
                                 lambda o: judge_grasp(self.world, o, pred.T_base_tcp))
-            place = self._judge(obj, T_base_obj, trial.pose,
+            place = self.judge_copy(obj, T_base_obj, trial.pose,
                                 lambda o: judge_place(self.world, o, pred.motion @ T_base_obj,
                                                       self.fixtures[t.fixture], t.upright))
             rows.append({**base, "method": method, "grasp": grasp.success, "place": place.success,
@@ -73,7 +73,7 @@ class TeleportedBench:
                          "why": f"grasp: {grasp.reason}; place: {place.reason}", "seconds": round(seconds, 2)})
         return rows
 
-    def _judge(self, obj, T_base_obj, pose, judge):
+    def judge_copy(self, obj, T_base_obj, pose, judge):
         """Run a judge on a fresh copy of the trial's object in the trial's pose."""
         copy = spawn(self.world, obj.category, obj.seed, pose, scale=obj.scale, T_world_obj=T_base_obj)
         try:

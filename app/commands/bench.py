@@ -11,7 +11,7 @@ QUICK = {"trials": 2, "methods": "cpd,ibs-nif", "poses": "upright"}
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    from app.nift.imitation_config import ImitationConfig
+    from app.nift.imitation_config import DEMO_MATCHES, ImitationConfig
 
     p.add_argument("--tasks", default="mug,bowl,bottle",
                    help="comma list: mug, bowl, bottle, and the out-of-domain bowl-demos-on-mug, bottle-demos-on-vase")
@@ -35,6 +35,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--place-contact-scale", type=float, default=ImitationConfig.place_contact_scale,
                    help="metres: weight place template points by exp(-d / scale), d their distance to the rack or "
                         f"shelf (default {ImitationConfig.place_contact_scale}; 0: the paper's plain mean; README)")
+    p.add_argument("--place-demo-match", choices=DEMO_MATCHES, default=ImitationConfig.place_demo_match,
+                   help="compare a place pose with the demos' mean features (mean, the paper's) or with each demo's "
+                        f"own, taking the nearest (nearest); default {ImitationConfig.place_demo_match} (README)")
     p.add_argument("--workers", type=int, default=2, help="worker processes (default 2, one per core)")
     p.add_argument("--minutes", type=float,
                    help="stop after this wall time and write the table of the trials done (the same command resumes)")
@@ -69,7 +72,7 @@ def run(args: argparse.Namespace) -> int:
     methods = tuple(m if m == ORACLE else check_method(m) for m in _names(args.methods))
     config = BenchConfig(tasks, poses, methods, args.trials, args.demos, args.camera, args.setting, args.seed,
                          args.nif, center_grasp=args.center_grasp, feasible=args.feasible,
-                         place_contact_scale=args.place_contact_scale)
+                         place_contact_scale=args.place_contact_scale, place_demo_match=args.place_demo_match)
     with tqdm(unit="trial", desc="bench", disable=args.json) as bar:
         def progress(done: int, total: int) -> None:
             bar.total = total

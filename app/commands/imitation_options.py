@@ -5,8 +5,9 @@ import argparse
 
 
 def add_imitation_arguments(p: argparse.ArgumentParser) -> None:
-    """--inits, --iterations, --prune-every, --patience, --explore-points, --{grasp,place}-contact-scale."""
-    from app.nift.imitation_config import ImitationConfig as C
+    """--inits, --iterations, --prune-every, --patience, --explore-points, --{grasp,place}-contact-scale,
+    --place-demo-match."""
+    from app.nift.imitation_config import DEMO_MATCHES, ImitationConfig as C
 
     p.add_argument("--inits", type=int, default=C.inits, help=f"parallel initialisations (paper: 10; default {C.inits})")
     p.add_argument("--iterations", type=int, default=C.iterations,
@@ -21,6 +22,9 @@ def add_imitation_arguments(p: argparse.ArgumentParser) -> None:
                    help="metres: weight grasp template points by exp(-d / scale), d their distance to the gripper (0: the paper's mean)")
     p.add_argument("--place-contact-scale", type=float, default=C.place_contact_scale,
                    help="metres: the same for place templates (distance to the rack or shelf; 0: the paper's mean)")
+    p.add_argument("--place-demo-match", choices=DEMO_MATCHES, default=C.place_demo_match,
+                   help="compare place poses with the demos' mean features (mean, the paper's) or each demo's own, "
+                        "taking the nearest (nearest)")
 
 
 def imitation_config(args: argparse.Namespace):
@@ -30,4 +34,5 @@ def imitation_config(args: argparse.Namespace):
     return ImitationConfig(inits=args.inits, iterations=args.iterations, prune_every=args.prune_every,
                            patience=args.patience, explore_points=args.explore_points,
                            grasp_contact_scale=args.grasp_contact_scale,
-                           place_contact_scale=args.place_contact_scale, seed=args.seed)
+                           place_contact_scale=args.place_contact_scale, place_demo_match=args.place_demo_match,
+                           seed=args.seed)

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+DEMO_MATCHES = ("mean", "nearest")
+
 
 @dataclass(frozen=True)
 class ImitationConfig:
@@ -30,9 +32,16 @@ class ImitationConfig:
     # templates, where it cost bowl and mug grasps (README, "Contact weighting").
     grasp_contact_scale: float = 0.0  # metres, for templates of the gripper
     place_contact_scale: float = 0.01  # metres, for templates of a fixture (rack, shelf)
+    # Demo matching (our addition): "mean" compares a pose with the demos' mean features (the paper's
+    # Eq. 5); "nearest" with each demo's own and takes the nearest demo's loss (`app.nift.imitate`).
+    grasp_demo_match: str = "mean"
+    place_demo_match: str = "mean"
     seed: int = 0
 
     def __post_init__(self) -> None:
+        for name in ("grasp_demo_match", "place_demo_match"):
+            if getattr(self, name) not in DEMO_MATCHES:
+                raise ValueError(f"unknown {name} {getattr(self, name)!r}; choose one of {', '.join(DEMO_MATCHES)}")
         for name in ("grasp_contact_scale", "place_contact_scale"):
             if not getattr(self, name) >= 0.0:  # also NaN
                 raise ValueError(f"{name} must be >= 0 metres (0: the paper's plain mean), got {getattr(self, name)}")
@@ -40,3 +49,7 @@ class ImitationConfig:
     def contact_scale(self, anchor: str) -> float:
         """The contact weighting scale for a template of this anchor."""
         return self.grasp_contact_scale if anchor == "gripper" else self.place_contact_scale
+
+    def demo_match(self, anchor: str) -> str:
+        """How a template of this anchor is matched to its demos: "mean" or "nearest"."""
+        return self.grasp_demo_match if anchor == "gripper" else self.place_demo_match
