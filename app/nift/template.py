@@ -12,7 +12,8 @@ points is resampled back to M points with probability proportional to a density 
 
     w(x) = 1 / mean_{k nearest} |x - x_k|,   k = number of demos    (more weight where demos agree)
 
-and the template feature of a point is the mean over demos of f(T_d x | O_d). Each point also keeps
+and the template feature of a point is the mean over demos of f(T_d x | O_d) (each demo's own ones
+stay in memory, `Template.per_demo`, for nearest-demo matching; files keep the mean). Each point also keeps
 its distance to the anchor's surface (0 inside it), which imitation may use to weight the points
 near the contact (`ImitationConfig.contact_scale`, our addition).
 Features: "nif" (all NIF decoder activations), "ndf" (all NDF activations), "scf" (the NIF's
