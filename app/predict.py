@@ -93,7 +93,8 @@ def _predict(t: Task, cloud: np.ndarray, method: str, T_base_fixture: np.ndarray
     if key == "cpd":
         return _predict_cpd(method, t, cloud, T_base_fixture, directory)
     query, feature = key.split("-")
-    nearest = tuple(s for s, anchor in (("grasp", "gripper"), ("place", t.fixture)) if config.demo_match(anchor) == "nearest")
+    anchors = {"grasp": "gripper", "place": t.fixture}
+    nearest = tuple(s for s, anchor in anchors.items() if config.demo_match(anchor) == "nearest")  # per-demo features
     templates = task_templates(t, directory, query, feature, nif=nif, per_demo=nearest)
     field = load_field(nif_override(feature, nif) or FEATURES[feature])  # once for both templates
     grasp = imitate(templates["grasp"], cloud, config, field, grips_something(cloud) if feasible else None)

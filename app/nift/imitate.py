@@ -26,13 +26,13 @@ taken over a fixed random subset of `explore_points` template points, then over 
 (refinement). Both cut the work where it was spent: 10 initialisations x 500 points for the first
 steps. Every initialisation's final pose is scored on all points before the best is chosen.
 
-Optional demo matching "nearest" (our addition; `ImitationConfig.place_demo_match`): instead of the demos' mean feature, each pose is
-compared with every demo's own features and its loss is the nearest demo's,
+Optional demo matching "nearest" (our addition, off by default; `ImitationConfig.place_demo_match`):
+instead of the demos' mean feature, each pose is compared with every demo's own features and its
+loss is the nearest demo's,
 
     L(T) = min_d  sum_{x in X}  w(x) | f(x | O_d) - f(T x | O_target) |_1
 
-- the mean of ten mugs' fields is no mug's, and on unseen mugs the teacher's hang scored worse than
-wrong hangs under it (README, "Nearest demo").
+(the mean of ten mugs' fields is no mug's). Measured on the bench: no gain (README, "Nearest demo").
 
 Optional `feasible` (our addition): a predicate on poses (K, 4, 4) -> (K,) bool from the caller
 (e.g. "the fingers would close on something"); pruning drops infeasible initialisations first and
@@ -104,7 +104,8 @@ def demo_targets(template: Template, match: str) -> np.ndarray:
     if match == "mean":
         return template.features[None]
     if template.per_demo is None:
-        raise ValueError("matching the nearest demo needs each demo's features: load the template with per_demo=True")
+        raise ValueError("matching the nearest demo needs each demo's features: "
+                         "load the template with task_templates(..., per_demo=(stage,)) or with_demo_features")
     return template.per_demo
 
 
