@@ -34,7 +34,7 @@ from app.peg_centering import center_on_peg
 from app.nift.field import load_field
 from app.nift.imitate import ImitationConfig, imitate
 from app.nift.template import FEATURES, nif_override
-from app.recorder import DEMOS_DIR, task_demos, task_templates
+from app.recorder import DEMOS_DIR, STAGES, stage_anchor, task_demos, task_templates
 from app.se3 import invert
 from app.tasks import Task
 
@@ -93,8 +93,7 @@ def _predict(t: Task, cloud: np.ndarray, method: str, T_base_fixture: np.ndarray
     if key == "cpd":
         return _predict_cpd(method, t, cloud, T_base_fixture, directory)
     query, feature = key.split("-")
-    anchors = {"grasp": "gripper", "place": t.fixture}
-    nearest = tuple(s for s, anchor in anchors.items() if config.demo_match(anchor) == "nearest")  # per-demo features
+    nearest = tuple(s for s in STAGES if config.demo_match(stage_anchor(t, s)) == "nearest")  # per-demo features
     templates = task_templates(t, directory, query, feature, nif=nif, per_demo=nearest)
     field = load_field(nif_override(feature, nif) or FEATURES[feature])  # once for both templates
     grasp = imitate(templates["grasp"], cloud, config, field, grips_something(cloud) if feasible else None)

@@ -109,10 +109,14 @@ def template_path(out: Path, stage: str, query: str = "ibs", feature: str = "nif
 def build_task_templates(t: Task, demos: list[Demo], query: str = "ibs", feature: str = "nif",
                          n_points: int = 500, seed: int = 0, nif: str | Path | None = None) -> dict[str, Template]:
     """The grasp and place templates of a task from its demos (`nif`: NIF weights, default shipped)."""
-    anchors = {"grasp": "gripper", "place": t.fixture}
     weights = nif_override(feature, nif)
-    return {stage: build_template(anchors[stage], anchor_mesh(anchors[stage]), template_frames(demos, stage), query,
-                                  feature, n_points, weights=weights, seed=seed) for stage in STAGES}
+    return {stage: build_template(stage_anchor(t, stage), anchor_mesh(stage_anchor(t, stage)), template_frames(demos, stage),
+                                  query, feature, n_points, weights=weights, seed=seed) for stage in STAGES}
+
+
+def stage_anchor(t: Task, stage: str) -> str:
+    """The anchor of a stage's template: the gripper for the grasp, the task's fixture for the place."""
+    return "gripper" if stage == "grasp" else t.fixture
 
 
 def template_frames(demos: list[Demo], stage: str) -> list[dict]:

@@ -109,6 +109,13 @@ def demo_targets(template: Template, match: str) -> np.ndarray:
     return template.per_demo
 
 
+def targets_and_weights(template: Template, config: ImitationConfig) -> tuple[torch.Tensor, torch.Tensor]:
+    """Eq. 5's feature targets (D, M, F) and point weights (M,) for a template under `config`."""
+    targets = demo_targets(template, config.demo_match(template.anchor))
+    w = point_weights(template, config.contact_scale(template.anchor))
+    return torch.as_tensor(targets, dtype=torch.float32), torch.as_tensor(w, dtype=torch.float32)
+
+
 def eq5(f: torch.Tensor, targets: torch.Tensor, w: torch.Tensor) -> torch.Tensor:
     """Eq. 5 per pose (I,): features f (I, M, F) at the posed template points against targets
     (D, M, F), weights w (M,) summing to 1; the nearest target's loss (D = 1: the paper's)."""
@@ -121,8 +128,7 @@ def losses_at(template: Template, cloud: np.ndarray, poses: np.ndarray, config: 
     """Eq. 5 (I,) at given anchor poses (I, 4, 4) in the cloud's (N, 3) frame, with `config`'s
     weighting and demo matching: what `imitate` minimises."""
     field = field or load_field(FEATURES[template.feature])
-    targets = torch.as_tensor(demo_targets(template, config.demo_match(template.anchor)), dtype=torch.float32)  # (D, M, F)
-    w = torch.as_tensor(point_weights(template, config.contact_scale(template.anchor)), dtype=torch.float32)  # (M,)
+    targets, w = targets_and_weights(template, config)  # (D, M, F), (M,)
     x = np.einsum("iab,mb->ima", poses[:, :3, :3], template.points) + poses[:, None, :3, 3]  # (I, M, 3)
     with torch.no_grad():
         f = point_features(field, template.feature, field.encode(cloud), torch.as_tensor(x, dtype=torch.float32))
@@ -185,8 +191,7 @@ def _optimise(template: Template, cloud: np.ndarray, config: ImitationConfig, fi
     """The loop of `imitate` (the field's parameters frozen)."""
     rng = np.random.default_rng(config.seed)
     X = torch.as_tensor(template.points, dtype=torch.float32)  # (M, 3)
-    target = torch.as_tensor(demo_targets(template, config.demo_match(template.anchor)), dtype=torch.float32)  # (D, M, F)
-    w = torch.as_tensor(point_weights(template, config.contact_scale(template.anchor)), dtype=torch.float32)  # (M,) sum 1
+    target, w = targets_and_weights(template, config)  # (D, M, F), (M,) sum 1
     c_X, c_O = X.mean(dim=0), torch.as_tensor(cloud.mean(axis=0), dtype=torch.float32)
     R0 = torch.as_tensor(random_rotations(config.inits, rng), dtype=torch.float32)
     r6 = rotation_to_6d(R0).requires_grad_(True)  # (I, 6)
