@@ -158,7 +158,8 @@ class Planner:
         place, retreat = self._first(solutions(self.kin, T_place, lift.end, self.scene, c.ik, (OBJECT,), "place"),
                                      lambda q: (_reverse(self.line(q, T_pre_place, "place", (OBJECT,))),
                                                 self.line(q, T_retreat, "retreat", (OBJECT,))))
-        carry = self.transit(lift.end, place.q[0], "carry", ignore=(OBJECT,))
+        with self.scene.holding(OBJECT, T_grasp):  # the carried object must clear the cell too
+            carry = self.transit(lift.end, place.q[0], "carry", ignore=(OBJECT,))
         T_clear = self.kin.fk(retreat.end)
         T_clear[2, 3] += c.lift_height
         clear = self.line(retreat.end, T_clear, "clear", ignore=(OBJECT,))

@@ -2,7 +2,8 @@
 import numpy as np
 import pytest
 
-from app.motion.cartesian import line_path
+from app.cell import CellConfig
+from app.motion.cartesian import MAX_JOINT_JUMP, line_path
 from app.motion.ik import IKConfig, NoIKSolution, solve
 from app.motion.scene import PlanningScene
 from app.motion.trajectory import path_timing, through_waypoints
@@ -90,3 +91,58 @@ def test_cartesian_approach_stays_on_the_straight_line(kin, limits, scene):
     speeds = np.linalg.norm(np.diff([kin.fk(q)[:3, 3] for q in traj.q], axis=0), axis=1) / np.diff(traj.times)
     assert speeds.max() <= 0.15 * 1.05
     assert np.allclose(kin.fk(traj.end), T_pre, atol=1e-4)
+
+
+class _SteepWrist:
+    """A stand-in kinematics: joint 4 follows the TCP's x, steeply (0.12 rad per 4 mm step), plus a
+    jump of pi past x = `flip_at` (a branch switch) if given; fk is not needed by line_path."""
+
+    def __init__(self, flip_at: float | None = None) -> None:
+        self.flip_at = flip_at
+
+    def ik(self, T, seed):
+        q = np.zeros(6)
+        q[3] = 30.0 * T[0, 3] + (np.pi if self.flip_at is not None and T[0, 3] > self.flip_at else 0.0)
+        return q
+
+
+def test_a_fast_but_continuous_line_is_kept_and_a_branch_switch_refused():
+    T0, T1 = make_pose(t=[0.0, 0.0, 0.3]), make_pose(t=[0.1, 0.0, 0.3])
+    path = line_path(_SteepWrist(), T0, T1, np.zeros(6))  # every step moves 0.12 rad > MAX_JOINT_JUMP
+    assert np.abs(np.diff(path, axis=0)).max() > MAX_JOINT_JUMP
+    assert np.allclose(path[:, 3], 30.0 * np.linspace(0.0, 0.1, len(path)))
+    with pytest.raises(NoIKSolution, match="flip its configuration at 5[0-9]%"):
+        line_path(_SteepWrist(flip_at=0.05), T0, T1, np.zeros(6))
+
+
+def test_retreat_near_the_wrist_singularity_stays_on_its_line(kin):
+    q_hang = np.array([3.293, -1.2, 2.106, -3.054, -0.109, -0.201])  # a teacher's hang on the rack, q5 ~ 0
+    T0 = kin.fk(q_hang)
+    T1 = T0 @ make_pose(t=[0.0, 0.0, -0.10])  # the retreat: back along the tool axis
+    path = line_path(kin, T0, T1, q_hang)
+    assert np.abs(np.diff(path, axis=0)).max() > MAX_JOINT_JUMP  # this line needs the closer look
+    u = T1[:3, 3] - T0[:3, 3]
+    for a, b in zip(path[:-1], path[1:]):
+        for w in np.linspace(0.0, 1.0, 5):  # between the points too: the trajectory interpolates q
+            p = kin.fk((1 - w) * a + w * b)[:3, 3] - T0[:3, 3]
+            assert np.linalg.norm(p - (p @ u) / (u @ u) * u) < 0.002
+
+
+def test_a_held_object_is_carried_and_collides_where_it_goes(kin, scene):
+    rng = np.random.default_rng(0)
+    cube = rng.uniform([0.45, -0.05, 0.03], [0.53, 0.03, 0.09], (400, 3))  # 8 cm of points, 3 cm above the table
+    T_grasp = make_pose(rotvec_to_matrix([np.pi, 0, 0]), [0.49, -0.01, 0.10])
+    q_grasp = solve(kin, T_grasp, HOME_Q, None)
+    T_rack = CellConfig().fixture_pose("rack")
+    T_at_post = make_pose(T_grasp[:3, :3], T_rack[:3, 3] + [0.0, 0.0, 0.15])  # the cube's centre at the post
+    q_post = solve(kin, T_at_post @ make_pose(t=[0.0, 0.0, -0.01]), HOME_Q, None)
+    scene.add_cloud("object", cube)
+    try:
+        with scene.holding("object", T_grasp):
+            assert not [h for h in scene.collisions(q_grasp, ("object",)) if h.startswith("held")]  # the gripper holds it
+            assert "held-rack" in scene.collisions(q_post, ("object",))
+        assert not [h for h in scene.collisions(q_post, ("object",)) if h.startswith("held")]  # let go: not carried
+    finally:
+        scene.remove("object")
+    with scene.holding("nothing", T_grasp):  # not a cloud obstacle: nothing is carried
+        assert scene.held is None
