@@ -20,13 +20,24 @@ most of the object's height (a bottle's neck grasp: ~12 cm). Measured on the fir
 bottles arbitrary place 0.65 -> 0.85. A tolerance of 4 cm with the approach axis's tilt also
 checked (30 degrees) cost mug places (0.40 -> 0.10 arbitrary): a mug grasped elsewhere on its rim
 hangs with the gripper at another tilt.
+
+Executed jobs add one more test on both (`reaches`, `reaches_at_place`): the cell must be able to
+put its TCP at the grasp, and at the place with that grasp - the open gripper hitting nothing of
+the cell and some collision-free IK solution (`app.motion.ik.reach_check`). The teleported
+benchmark judges switch gripper-table collisions off (NDF's protocol) and do not use it; on the
+cell a grasp through the table, from behind the object or a place inside the rack fails at planning.
 """
 from __future__ import annotations
+
+from collections.abc import Callable
 
 import numpy as np
 
 from app.grasp_centering import swept_points
 from app.se3 import invert
+
+Predicate = Callable[[np.ndarray], np.ndarray]  # poses (K, 4, 4) -> (K,) bool
+Reach = Callable[[np.ndarray], bool]  # a TCP pose (4, 4) -> can the cell put its TCP there
 
 GRIP_POINTS = 20  # a grasp closes on something when at least this many cloud points lie between the fingers
 CARRY_TOLERANCE = 0.06  # metres: a carried grasp this close in height to some demo's is consistent
@@ -48,3 +59,22 @@ def carries_like_demos(T_base_tcp: np.ndarray, demos: list[np.ndarray], toleranc
     heights = np.array([carried_height(T) for T in demos])  # (D,)
     return lambda poses: np.array([np.abs(carried_height(invert(T) @ T_base_tcp) - heights).min() <= tolerance
                                    for T in poses])
+
+
+def reaches(reachable: Reach) -> Predicate:
+    """Predicate on grasp poses (K, 4, 4): the cell can put its TCP there."""
+    return lambda poses: np.array([reachable(T) for T in poses])
+
+
+def reaches_at_place(reachable: Reach, T_base_fixture: np.ndarray, T_base_tcp: np.ndarray) -> Predicate:
+    """Predicate on place poses (K, 4, 4) (T_base_fixture_seen): the cell can carry the grasp
+    T_base_tcp to the real fixture (TCP at T_base_fixture @ inv(T) @ T_base_tcp)."""
+    return lambda poses: np.array([reachable(T_base_fixture @ invert(T) @ T_base_tcp) for T in poses])
+
+
+def all_of(*predicates: Predicate | None) -> Predicate | None:
+    """The conjunction of the given predicates (None ones left out; None if none is given)."""
+    given = [f for f in predicates if f is not None]
+    if not given:
+        return None
+    return lambda poses: np.logical_and.reduce([f(poses) for f in given])

@@ -17,7 +17,7 @@ from typing import Callable
 import numpy as np
 
 from app.executor import OBJECT, ExecutionError, ExecutorConfig, Planner, execute
-from app.motion.ik import NoIKSolution
+from app.motion.ik import NoIKSolution, reach_check
 from app.motion.scene import PlanningScene
 from app.nift.imitate import ImitationConfig
 from app.perception import PerceptionConfig, object_cloud
@@ -42,7 +42,8 @@ class JobConfig:
     # inside a bowl swept the far finger into its wall and dragged it off the shelf on the retreat
     demos: Path | None = None  # task directory (default demos/<task>)
     center_grasp: bool = True  # centre the grasp between the fingers and a hang on the peg (app.grasp_centering, app.peg_centering)
-    feasible: bool = True  # prefer grasps that close on something and places the grasp can carry to (app.feasibility)
+    feasible: bool = True  # prefer grasps that close on something, places the grasp can carry to, and poses
+    # the cell can reach (app.feasibility, app.motion.ik.reach_check)
     perception: PerceptionConfig = PerceptionConfig()
     imitation: ImitationConfig = ImitationConfig()
     executor: ExecutorConfig = ExecutorConfig()
@@ -112,8 +113,10 @@ def run_job(t: Task, arm: Arm, gripper: Gripper, camera: DepthCamera, T_base_cam
     result = JobResult(t.name, config.method)
     if predictor is None:
         def predictor(cloud: np.ndarray) -> Prediction:
+            kin = UR5Kinematics(tcp_offset=ur_to_pose(arm.getTCPOffset()))
+            reachable = reach_check(kin, scene, arm.getActualQ(), ignore=(OBJECT,))
             return predict(t, cloud, config.method, T_base_fixture, config.demos, config.imitation,
-                           center=config.center_grasp, feasible=config.feasible)
+                           center=config.center_grasp, feasible=config.feasible, reachable=reachable)
     try:
         _run(t, arm, gripper, camera, T_base_cam, T_base_fixture, scene, config, hooks, predictor, result)
         result.arm = "home"

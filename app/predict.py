@@ -25,7 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
-from app.feasibility import carries_like_demos, grips_something
+from app.feasibility import Reach, all_of, carries_like_demos, grips_something, reaches, reaches_at_place
 from app.grasp_centering import center_grasp
 from app.nift.cpd import best_registration
 from app.methods import check_method
@@ -66,12 +66,14 @@ class Prediction:
 
 def predict(t: Task, cloud: np.ndarray, method: str = "nift", T_base_fixture: np.ndarray | None = None,
             directory: Path | None = None, config: ImitationConfig = ImitationConfig(),
-            nif: str | Path | None = None, center: bool = True, feasible: bool = True) -> Prediction:
+            nif: str | Path | None = None, center: bool = True, feasible: bool = True,
+            reachable: Reach | None = None) -> Prediction:
     """Grasp pose and place motion for a target cloud (N, 3) in the base frame (`nif`: NIF weights for
     the nif and scf features, default the shipped ones; `center`: centre the grasp on the points
     between the fingers and a hang on the peg, `app.grasp_centering` and `app.peg_centering`;
-    `feasible`: prefer feasible poses, `app.feasibility`)."""
-    pred = _predict(t, cloud, method, T_base_fixture, directory, config, nif, feasible)
+    `feasible`: prefer feasible poses, `app.feasibility`; `reachable`: whether the cell can put its TCP
+    at a pose - given, a template method's feasible grasps and places are also ones it can reach)."""
+    pred = _predict(t, cloud, method, T_base_fixture, directory, config, nif, feasible, reachable)
     if center:
         pred.T_base_tcp = center_grasp(pred.T_base_tcp, cloud)
         seen = center_on_peg(pred.T_base_fixture_seen, cloud, fixture(t.fixture))
@@ -82,7 +84,8 @@ def predict(t: Task, cloud: np.ndarray, method: str = "nift", T_base_fixture: np
 
 
 def _predict(t: Task, cloud: np.ndarray, method: str, T_base_fixture: np.ndarray | None, directory: Path | None,
-             config: ImitationConfig, nif: str | Path | None, feasible: bool = True) -> Prediction:
+             config: ImitationConfig, nif: str | Path | None, feasible: bool = True,
+             reachable: Reach | None = None) -> Prediction:
     """`predict` before the grasp is centred."""
     key = check_method(method)
     directory = directory or DEMOS_DIR / t.demos
@@ -96,11 +99,14 @@ def _predict(t: Task, cloud: np.ndarray, method: str, T_base_fixture: np.ndarray
     nearest = tuple(s for s in STAGES if config.demo_match(stage_anchor(t, s)) == "nearest")  # per-demo features
     templates = task_templates(t, directory, query, feature, nif=nif, per_demo=nearest)
     field = load_field(nif_override(feature, nif) or FEATURES[feature])  # once for both templates
-    grasp = imitate(templates["grasp"], cloud, config, field, grips_something(cloud) if feasible else None)
+    reach = reachable if feasible else None
+    grasp = imitate(templates["grasp"], cloud, config, field,
+                    all_of(grips_something(cloud), reaches(reach) if reach else None) if feasible else None)
     carry = None
     if feasible:
         carried = [invert(d.place_anchor()) @ d.T_base_tcp for d in task_demos(directory)]  # each demo's T_fixture_tcp
-        carry = carries_like_demos(grasp.T, carried)
+        carry = all_of(carries_like_demos(grasp.T, carried),
+                       reaches_at_place(reach, T_base_fixture, grasp.T) if reach else None)
     place = imitate(templates["place"], cloud, config, field, carry)
     return Prediction(method, grasp.T, place.T, T_base_fixture @ invert(place.T),
                       {"grasp": grasp.losses.round(5).tolist(), "place": place.losses.round(5).tolist()},

@@ -1,7 +1,7 @@
-"""Feasibility of imitated poses: the two predicates on known geometry, and imitation honouring a predicate."""
+"""Feasibility of imitated poses: the predicates on known geometry, and imitation honouring a predicate."""
 import numpy as np
 
-from app.feasibility import GRIP_POINTS, carries_like_demos, grips_something
+from app.feasibility import GRIP_POINTS, all_of, carries_like_demos, grips_something, reaches, reaches_at_place
 from app.se3 import invert, make_pose, random_rotations, rotvec_to_matrix
 
 
@@ -30,3 +30,21 @@ def test_a_place_that_turns_the_object_over_relative_to_the_grasp_is_not_carried
     flip = make_pose(rotvec_to_matrix([np.pi, 0, 0]), [0.0, 0.0, 0.22])  # upside down, top (22 cm) on the board
     over = T_base_obj @ invert(flip)
     assert carries_like_demos(T_base_tcp, demos)(np.stack([upright, yawed, over])).tolist() == [True, True, False]
+
+
+def test_reach_at_the_place_is_asked_of_the_tcp_the_grasp_is_carried_to():
+    """The cell can reach TCP heights above 0.2 m only (a stand-in for IK): a grasp 5 cm above the
+    object's origin, a shelf whose top is at 0.18 m, places with the object on it and 10 cm lower."""
+    reachable = lambda T: T[2, 3] > 0.2  # noqa: E731
+    T_base_fixture = make_pose(np.eye(3), [0.5, -0.4, 0.18])
+    T_base_obj = make_pose(rotvec_to_matrix([0.0, 0.0, 0.7]), [0.4, 0.1, 0.0])
+    T_base_tcp = T_base_obj @ make_pose(np.eye(3), [0.0, 0.0, 0.05])
+    on_top = T_base_obj  # T_base_fixture_seen: the fixture's frame at the object's base -> TCP at 0.23 m
+    lower = T_base_obj @ make_pose(np.eye(3), [0.0, 0.0, 0.10])  # the object 10 cm lower -> TCP at 0.13 m
+    ok = reaches_at_place(reachable, T_base_fixture, T_base_tcp)(np.stack([on_top, lower]))
+    assert ok.tolist() == [True, False]
+    assert reaches(reachable)(np.stack([T_base_tcp, T_base_fixture])).tolist() == [False, False]
+    both = all_of(reaches(reachable), None, lambda poses: poses[:, 0, 3] > 0.45)
+    poses = np.stack([make_pose(t=[0.5, 0.0, 0.3]), make_pose(t=[0.4, 0.0, 0.3]), make_pose(t=[0.5, 0.0, 0.1])])
+    assert both(poses).tolist() == [True, False, False]
+    assert all_of(None, None) is None

@@ -7,7 +7,9 @@ from app.nift.imitate import ImitationConfig, imitate
 from app.nift.raycast import scene_of
 from app.nift.template import build_template
 from app.objects import generate, rack
+from app.predict import predict
 from app.se3 import invert, make_pose, random_rotations, rotvec_to_matrix
+from app.tasks import task
 from app.teacher import grasp_pose, hang_pose
 from app.training.views import observe
 
@@ -171,3 +173,24 @@ def test_per_demo_features_are_not_saved_and_come_back_from_the_same_demos_only(
         with_demo_features(loaded, frames[:1])
     with pytest.raises(ValueError, match="unknown place_demo_match 'closest'"):
         ImitationConfig(place_demo_match="closest")
+
+
+def test_predict_asks_the_cell_about_the_tcp_at_the_grasp_and_at_the_place_it_picks():
+    """`reachable` is asked about TCP poses: the grasps, and the grasp carried to each place - among
+    them exactly the grasp and the place TCP the prediction ends with (no centring)."""
+    cloud, _, _ = demo_scene(seed=5)
+    asked = []
+
+    def reachable(T):
+        asked.append(T.copy())
+        return True
+
+    config = ImitationConfig(inits=8, iterations=80)
+    pred = predict(task("mug"), cloud, "ibs-nif", config=config, center=False, reachable=reachable)
+    assert any(np.allclose(T, pred.T_base_tcp, atol=1e-9) for T in asked)
+    assert any(np.allclose(T, pred.T_base_tcp_place, atol=1e-6) for T in asked)
+    # a cell that reaches nothing: no grasp is feasible, and the one found is the one found without
+    # any predicate (pruned by loss alike; before, pruning kept arbitrary infeasible ones)
+    refused = predict(task("mug"), cloud, "ibs-nif", config=config, center=False, reachable=lambda T: False)
+    plain = predict(task("mug"), cloud, "ibs-nif", config=config, center=False, feasible=False)
+    assert np.allclose(refused.T_base_tcp, plain.T_base_tcp)

@@ -4,7 +4,7 @@ import pytest
 
 from app.cell import CellConfig
 from app.motion.cartesian import MAX_JOINT_JUMP, line_path
-from app.motion.ik import IKConfig, NoIKSolution, solve
+from app.motion.ik import IKConfig, NoIKSolution, reach_check, solve
 from app.motion.scene import PlanningScene
 from app.motion.trajectory import path_timing, through_waypoints
 from app.se3 import line_length, make_pose, rotation_angle, rotvec_to_matrix
@@ -146,3 +146,14 @@ def test_a_held_object_is_carried_and_collides_where_it_goes(kin, scene):
         scene.remove("object")
     with scene.holding("nothing", T_grasp):  # not a cloud obstacle: nothing is carried
         assert scene.held is None
+
+
+def test_reach_check_passes_a_pose_over_the_table_and_refuses_table_rack_and_far_poses(kin, scene):
+    down = rotvec_to_matrix([np.pi, 0, 0])  # tool pointing down
+    reachable = reach_check(kin, scene, HOME_Q)
+    assert reachable(make_pose(down, [0.5, 0.0, 0.15]))
+    assert scene.gripper_collisions(make_pose(down, [0.5, 0.0, 0.01])) == ["table"]  # fingertips 1 cm into the table
+    assert not reachable(make_pose(down, [0.5, 0.0, 0.01]))
+    rack = CellConfig().fixture_pose("rack")
+    assert not reachable(make_pose(down, rack[:3, 3] + [0.0, 0.0, 0.2]))  # the open gripper around the post
+    assert not reachable(make_pose(down, [1.5, 0.0, 0.2]))  # beyond the UR5's reach

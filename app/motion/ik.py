@@ -62,3 +62,22 @@ def solve(kin: UR5Kinematics, T_base_tcp: np.ndarray, q_current: np.ndarray, sce
           config: IKConfig = IKConfig(), ignore: tuple[str, ...] = (), what: str = "pose") -> np.ndarray:
     """The collision-free IK solution for T_base_tcp nearest q_current; NoIKSolution says why not."""
     return solutions(kin, T_base_tcp, q_current, scene, config, ignore, what)[0]
+
+
+def reach_check(kin: UR5Kinematics, scene: PlanningScene, q_current: np.ndarray, ignore: tuple[str, ...] = (),
+                random_seeds: int = 6):
+    """A quick test of TCP poses for ranking candidates, pose (4, 4) -> bool: the open gripper alone
+    hits nothing (`PlanningScene.gripper_collisions`), then some collision-free IK solution from a
+    few seeds (~10 ms a pose). A pose it passes may still fail the full plan (the lines to it)."""
+    config = IKConfig(random_seeds=random_seeds)
+
+    def reachable(T_base_tcp: np.ndarray) -> bool:
+        if scene.gripper_collisions(T_base_tcp, ignore):
+            return False
+        try:
+            solutions(kin, T_base_tcp, q_current, scene, config, ignore)
+        except NoIKSolution:
+            return False
+        return True
+
+    return reachable

@@ -10,6 +10,9 @@ its footprint on the table) moves rigidly with the TCP as it was at T_base_tcp, 
 also names what it would hit ("held-rack"); the gripper's own links, which hold it, are exempt.
 Without it a carried mug was swept through the rack in 2 of 10 executed teacher jobs (our fix for
 the protective stops that followed; MoveIt calls this an attached collision object).
+
+`gripper_collisions(T_base_tcp)` asks the same of the gripper alone, open, at a TCP pose, without
+the arm: a cheap first test of candidate grasp and place poses before any IK (`app.feasibility`).
 """
 from __future__ import annotations
 
@@ -20,7 +23,9 @@ import numpy as np
 import pybullet as p
 
 from app.cell import CellConfig, add_fixtures
-from hardware.sim.robot import HOME_Q, SimRobot
+from hardware.robot_description import write_cached
+from hardware.sim.gripper_model import FINGER_JOINTS, standalone_gripper_urdf
+from hardware.sim.robot import HOME_Q, SimRobot, joint_and_link_indices
 from hardware.sim.world import SimWorld, SimWorldConfig
 
 HELD = "held"  # the name collisions give the carried object
@@ -43,6 +48,7 @@ class PlanningScene:
         self.self_pairs = self._self_pairs()
         self.solids: dict[str, np.ndarray] = {}  # cloud obstacles' points (with their shadow, no footprint)
         self.held: tuple[int, np.ndarray] | None = None  # (body, T_tcp_body) while holding
+        self.ghost = self._load_ghost_gripper()
 
     @property
     def client(self) -> int:
@@ -81,6 +87,21 @@ class PlanningScene:
         self.solids.pop(name, None)
         if body is not None:
             p.removeBody(body, physicsClientId=self.client)
+
+    def _load_ghost_gripper(self) -> int:
+        """A free copy of the gripper, fingers open, parked far away: `gripper_collisions` moves it."""
+        path = write_cached("nift_gripper", standalone_gripper_urdf(self.robot.geometry))
+        body = p.loadURDF(str(path), [0.0, 0.0, -10.0], useFixedBase=True, physicsClientId=self.client)
+        joints, _ = joint_and_link_indices(body, self.client)
+        for name in FINGER_JOINTS:
+            p.resetJointState(body, joints[name], self.robot.geometry.stroke / 2, 0.0, physicsClientId=self.client)
+        return body
+
+    def gripper_collisions(self, T_base_tcp: np.ndarray, ignore: tuple[str, ...] = ()) -> list[str]:
+        """Obstacles (not in `ignore`) the open gripper alone would hit at a TCP pose - no arm, no IK."""
+        self.world.set_pose(self.ghost, T_base_tcp @ np.linalg.inv(self.robot.geometry.T_tool0_tcp))
+        return [name for name, body in self.obstacles.items()
+                if name not in ignore and p.getClosestPoints(self.ghost, body, self.margin, physicsClientId=self.client)]
 
     @contextmanager
     def holding(self, name: str, T_base_tcp: np.ndarray):

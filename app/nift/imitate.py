@@ -35,7 +35,8 @@ loss is the nearest demo's,
 (the mean of ten mugs' fields is no mug's). Measured on the bench: no gain (README, "Nearest demo").
 
 Optional `feasible` (our addition): a predicate on poses (K, 4, 4) -> (K,) bool from the caller
-(e.g. "the fingers would close on something"); pruning drops infeasible initialisations first and
+(e.g. "the fingers would close on something"); pruning drops infeasible initialisations first (the
+higher-loss ones first among them: with none feasible it prunes as without a predicate) and
 the lowest-loss feasible pose wins (the lowest-loss one when none is feasible).
 
 Rotation parametrisation: the continuous 6-D representation of Zhou et al.
@@ -230,8 +231,9 @@ def _optimise(template: Template, cloud: np.ndarray, config: ImitationConfig, fi
             break
         if config.prune_every and iterations % config.prune_every == 0 and len(alive) > config.keep:
             rank = current.clone()
-            if feasible is not None:  # infeasible ones are dropped first
-                rank[torch.as_tensor(~feasible(_poses(r6, t, c_X, c_O)))] = float("inf")
+            if feasible is not None:  # infeasible ones are dropped first, the worst of them first
+                bad = torch.as_tensor(~feasible(_poses(r6, t, c_X, c_O)))
+                rank[bad] += rank.max() - rank.min() + 1.0  # after every feasible one, still ranked by loss
             keep = torch.argsort(rank)[:max(config.keep, len(alive) // 2)]
             final_r6[alive], final_t[alive] = r6.detach(), t.detach()  # the dropped ones keep these
             alive = alive[keep]
