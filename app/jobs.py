@@ -111,14 +111,14 @@ def run_job(t: Task, arm: Arm, gripper: Gripper, camera: DepthCamera, T_base_cam
     `predictor(cloud)` gives the grasp and place; by default the configured method on the task's demos."""
     hooks = hooks or JobHooks()
     result = JobResult(t.name, config.method)
+    kin = UR5Kinematics(tcp_offset=ur_to_pose(arm.getTCPOffset()))
     if predictor is None:
         def predictor(cloud: np.ndarray) -> Prediction:
-            kin = UR5Kinematics(tcp_offset=ur_to_pose(arm.getTCPOffset()))
             reachable = reach_check(kin, scene, arm.getActualQ(), ignore=(OBJECT,))
             return predict(t, cloud, config.method, T_base_fixture, config.demos, config.imitation,
                            center=config.center_grasp, feasible=config.feasible, reachable=reachable)
     try:
-        _run(t, arm, gripper, camera, T_base_cam, T_base_fixture, scene, config, hooks, predictor, result)
+        _run(t, arm, gripper, camera, T_base_cam, T_base_fixture, scene, kin, config, hooks, predictor, result)
         result.arm = "home"
     except JobFailed as exc:
         result.reason = str(exc)
@@ -128,8 +128,7 @@ def run_job(t: Task, arm: Arm, gripper: Gripper, camera: DepthCamera, T_base_cam
     return result
 
 
-def _run(t, arm, gripper, camera, T_base_cam, T_base_fixture, scene, config, hooks, predictor, result) -> None:
-    kin = UR5Kinematics(tcp_offset=ur_to_pose(arm.getTCPOffset()))
+def _run(t, arm, gripper, camera, T_base_cam, T_base_fixture, scene, kin, config, hooks, predictor, result) -> None:
     planner = Planner(kin, arm.joint_limits, scene, config.executor)
     tolerance = config.executor.end_tolerance
     with _stage(result, "capture", hooks):

@@ -100,8 +100,12 @@ class PlanningScene:
     def gripper_collisions(self, T_base_tcp: np.ndarray, ignore: tuple[str, ...] = ()) -> list[str]:
         """Obstacles (not in `ignore`) the open gripper alone would hit at a TCP pose - no arm, no IK."""
         self.world.set_pose(self.ghost, T_base_tcp @ np.linalg.inv(self.robot.geometry.T_tool0_tcp))
-        return [name for name, body in self.obstacles.items()
-                if name not in ignore and p.getClosestPoints(self.ghost, body, self.margin, physicsClientId=self.client)]
+        return self._obstacles_near(self.ghost, ignore)
+
+    def _obstacles_near(self, body: int, ignore: tuple[str, ...]) -> list[str]:
+        """Obstacles (not in `ignore`) within the margin of any link of a free body."""
+        return [name for name, other in self.obstacles.items()
+                if name not in ignore and p.getClosestPoints(body, other, self.margin, physicsClientId=self.client)]
 
     @contextmanager
     def holding(self, name: str, T_base_tcp: np.ndarray):
@@ -143,8 +147,7 @@ class PlanningScene:
             return []
         body, T_tcp_body = self.held
         self.world.set_pose(body, self.robot.kinematics.fk(q) @ T_tcp_body)
-        found = [f"{HELD}-{name}" for name, other in self.obstacles.items()
-                 if name not in ignore and self._near(body, other, -1, -1)]
+        found = [f"{HELD}-{name}" for name in self._obstacles_near(body, ignore)]
         return found + [f"{HELD}-{link}" for link in ARM_LINKS if self._near(body, self.robot.body, -1, self.links[link])]
 
     def _near(self, body_a: int, body_b: int, link_a: int, link_b: int) -> bool:
