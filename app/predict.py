@@ -33,7 +33,7 @@ from app.objects import fixture
 from app.peg_centering import center_on_peg
 from app.nift.field import load_field
 from app.nift.imitate import ImitationConfig, imitate
-from app.nift.template import FEATURES, nif_override
+from app.nift.template import FEATURES, field_override
 from app.recorder import DEMOS_DIR, STAGES, stage_anchor, task_demos, task_templates
 from app.se3 import invert
 from app.tasks import Task
@@ -98,7 +98,7 @@ def _predict(t: Task, cloud: np.ndarray, method: str, T_base_fixture: np.ndarray
     query, feature = key.split("-")
     nearest = tuple(s for s in STAGES if config.demo_match(stage_anchor(t, s)) == "nearest")  # per-demo features
     templates = task_templates(t, directory, query, feature, nif=nif, per_demo=nearest)
-    field = load_field(nif_override(feature, nif) or FEATURES[feature])  # once for both templates
+    field = load_field(field_override(feature, nif) or FEATURES[feature])  # once for both templates
     reach = reachable if feasible else None
     grasp = imitate(templates["grasp"], cloud, config, field,
                     all_of(grips_something(cloud), reaches(reach) if reach else None) if feasible else None)

@@ -22,7 +22,7 @@ from app.anchors import anchor_mesh
 from app.cell import SimCell
 from app.demo import Demo, load_demo, save_demo
 from app.judges import judge_grasp, judge_place
-from app.nift.template import (StaleTemplate, Template, build_template, field_id, load_template, nif_override,
+from app.nift.template import (StaleTemplate, Template, build_template, field_id, load_template, field_override,
                                save_template, with_demo_features)
 from app.objects import split
 from app.perception import object_cloud
@@ -99,17 +99,17 @@ def task_demos(out: Path) -> list[Demo]:
 
 
 def template_path(out: Path, stage: str, query: str = "ibs", feature: str = "nif", nif: str | Path | None = None) -> Path:
-    """Where a task's template lives; templates built with other NIF weights than the shipped ones
-    carry the weights' hash in the name, so several fields' templates sit side by side."""
-    nif = nif_override(feature, nif)
-    tag = "" if nif is None else f".{field_id(nif).split(':')[1]}"
+    """Where a task's template lives; templates built with other field weights than the shipped ones
+    (`nif`: see `field_override`) carry the weights' hash in the name, so several sit side by side."""
+    weights = field_override(feature, nif)
+    tag = "" if weights is None else f".{field_id(weights).split(':')[1]}"
     return out / f"{stage}-{query}-{feature}{tag}.nit.npz"
 
 
 def build_task_templates(t: Task, demos: list[Demo], query: str = "ibs", feature: str = "nif",
                          n_points: int = 500, seed: int = 0, nif: str | Path | None = None) -> dict[str, Template]:
     """The grasp and place templates of a task from its demos (`nif`: NIF weights, default shipped)."""
-    weights = nif_override(feature, nif)
+    weights = field_override(feature, nif)
     return {stage: build_template(stage_anchor(t, stage), anchor_mesh(stage_anchor(t, stage)), template_frames(demos, stage),
                                   query, feature, n_points, weights=weights, seed=seed) for stage in STAGES}
 
@@ -139,8 +139,8 @@ def task_templates(t: Task, directory: Path | None = None, query: str = "ibs", f
     with other field weights, or asked; those of the stages `per_demo` with each demo's own features
     (`Template.per_demo`)."""
     directory = directory or DEMOS_DIR / t.demos
-    weights = nif_override(feature, nif)
-    paths = {s: template_path(directory, s, query, feature, weights) for s in STAGES}
+    weights = field_override(feature, nif)
+    paths = {s: template_path(directory, s, query, feature, nif) for s in STAGES}
     if not rebuild and all(p.is_file() for p in paths.values()):
         try:
             templates = {s: load_template(p, weights) for s, p in paths.items()}
@@ -150,7 +150,7 @@ def task_templates(t: Task, directory: Path | None = None, query: str = "ibs", f
             for s in per_demo:
                 templates[s] = _with_demo_features(paths[s], paths[s].stat().st_mtime_ns, directory, s, weights)
             return templates
-    templates = build_task_templates(t, task_demos(directory), query, feature, nif=weights)
+    templates = build_task_templates(t, task_demos(directory), query, feature, nif=nif)
     for stage, template in templates.items():
         save_template(template, paths[stage])
     return templates

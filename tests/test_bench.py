@@ -119,6 +119,46 @@ def test_fused_cameras_see_more_of_the_object_than_the_cells_one():
     assert covered["fused"] > covered["single"] + 0.2, covered
 
 
+def test_fused_runs_imitate_demos_seen_by_the_fused_cameras(tmp_path):
+    """--camera fused: each demo's cloud is cast again at its recorded pose, from the four cameras."""
+    from scipy.spatial import cKDTree
+
+    from app.bench.demos import bench_demos
+    from app.demo import load_demo
+    from app.objects import generate
+    from app.recorder import DEMOS_DIR
+    from app.se3 import transform_points
+
+    root = bench_demos(BenchConfig(tasks=("mug",), demos=2, camera="fused"), tmp_path)
+    assert bench_demos(BenchConfig(tasks=("mug",)), tmp_path) == DEMOS_DIR  # all ten, one camera: as recorded
+    made = sorted((root / "mug").glob("demo-*.npz"))
+    assert [p.name for p in made] == [p.name for p in sorted((DEMOS_DIR / "mug").glob("demo-*.npz"))[:2]]
+    fused, recorded = load_demo(made[0]), load_demo(DEMOS_DIR / "mug" / made[0].name)
+    np.testing.assert_array_equal(fused.T_base_tcp, recorded.T_base_tcp)  # the same demo, seen otherwise
+    mesh = generate(fused.category, fused.seed)
+    mesh.apply_scale(fused.scale)
+    surface = transform_points(fused.T_base_obj, mesh.sample(3000, seed=0))  # the demo object where it stood
+    assert np.median(cKDTree(surface).query(fused.cloud)[0]) < 0.003  # the cloud lies on it: the pose is right
+    coverage = {name: float(np.mean(cKDTree(d.cloud).query(surface)[0] < 0.006))
+                for name, d in (("fused", fused), ("recorded", recorded))}
+    assert coverage["fused"] > coverage["recorded"] + 0.2, coverage
+
+
+def test_a_fields_directory_replaces_both_fields_and_a_file_the_nif_only(tmp_path):
+    from app.nift.template import field_id, field_override, weights_id
+
+    (tmp_path / "nif.pt").write_bytes(b"n")
+    (tmp_path / "ndf.pt").write_bytes(b"d")
+    assert field_override("scf", tmp_path) == tmp_path / "nif.pt"
+    assert field_override("ndf", tmp_path) == tmp_path / "ndf.pt"
+    assert field_override("ndf", tmp_path / "nif.pt") is None  # a NIF file leaves the NDF rows alone
+    assert field_override("nif", None) is None
+    assert weights_id(tmp_path) == f"{field_id(tmp_path / 'nif.pt')} {field_id(tmp_path / 'ndf.pt')}"
+    (tmp_path / "ndf.pt").unlink()
+    with pytest.raises(FileNotFoundError, match="no ndf.pt in the fields directory"):
+        field_override("ndf", tmp_path)
+
+
 @pytest.mark.slow
 def test_executed_setting_runs_whole_jobs_and_the_oracle_succeeds(tmp_path):
     config = BenchConfig(tasks=("bowl",), poses=("upright",), methods=(ORACLE,), trials=2, setting="executed")

@@ -40,7 +40,7 @@ class BenchConfig:
     camera: str = "single"
     setting: str = "teleported"
     seed: int = 0
-    nif: str | None = None  # NIF weights for the nif and scf rows (None: the shipped field); Table III
+    nif: str | None = None  # other field weights (app.nift.template.field_override): a NIF .pt or a dir of nif.pt + ndf.pt
     center_grasp: bool = True  # centre every method's grasp between the fingers and hang on the peg (app.grasp_centering, app.peg_centering)
     feasible: bool = True  # rank template methods' candidate poses by feasibility first (app.feasibility)
     place_contact_scale: float = ImitationConfig.place_contact_scale  # contact weighting of place templates; 0: the paper's
@@ -61,7 +61,7 @@ class BenchConfig:
             raise ValueError(f"--trials must be >= 1 and --demos 1..10 (got {self.trials}, {self.demos})")
         self.imitation(0)  # a bad --place-contact-scale fails here, in one line, not in the workers
         if self.nif is not None and self.setting == "executed":
-            raise ValueError("--nif applies to the teleported setting only (jobs use the shipped field)")
+            raise ValueError("--fields applies to the teleported setting only (jobs use the shipped fields)")
 
 
 @dataclass(frozen=True)

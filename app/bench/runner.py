@@ -4,24 +4,25 @@
 as soon as a trial is done. Starting again with the same settings skips finished trials (a
 half-written last line from an interruption is ignored); other settings in the same directory are
 refused. Trials run index-major (trial 1 of every task and pose, then trial 2, ...), so a run
-stopped early - by its `minutes` budget or Ctrl-C - already makes a balanced table. Demo subsets (--demos N < 10) are copied to `out/demos/<task>/` and their templates built
-there, before the workers start, so that no two workers build the same template.
+stopped early - by its `minutes` budget or Ctrl-C - already makes a balanced table. Demo subsets (--demos N < 10) and fused-camera demos are written to `out/demos/<task>/`
+(app.bench.demos) and every template is built before the workers start, so that no two workers
+build the same template.
 """
 from __future__ import annotations
 
 import json
 import multiprocessing as mp
-import shutil
 import time
 from dataclasses import asdict
 from pathlib import Path
 from typing import Callable
 
+from app.bench.demos import bench_demos
 from app.bench.protocol import BenchConfig, Trial, trials
 from app.io_utils import write_json
 from app.methods import ORACLE, check_method
-from app.nift.template import field_id
-from app.recorder import DEMOS_DIR, task_templates
+from app.nift.template import weights_id
+from app.recorder import task_templates
 from app.tasks import task
 
 FORMAT = "nift-bench/1"
@@ -34,7 +35,7 @@ def settings(config: BenchConfig) -> dict:
     d = asdict(config)
     d["cell"] = repr(config.cell)
     if config.nif is not None:
-        d["nif_id"] = field_id(config.nif)  # the hash: other weights at the same path do not resume
+        d["nif_id"] = weights_id(config.nif)  # the hash: other weights at the same path do not resume
     return {"format": FORMAT, **d}
 
 
@@ -56,15 +57,7 @@ def prepare(config: BenchConfig, out: Path) -> Path:
                              f"ask for at least that many or choose another --out")
     # more trials than before extend the run: a trial's seed depends on its index alone (protocol.py)
     write_json(run_file, wanted)
-    root = DEMOS_DIR
-    if config.demos < 10:
-        root = out / "demos"
-        for name in {task(t).demos for t in config.tasks}:
-            target = root / name
-            target.mkdir(parents=True, exist_ok=True)
-            for path in sorted((DEMOS_DIR / name).glob("demo-*.npz"))[: config.demos]:
-                if not (target / path.name).exists():
-                    shutil.copy2(path, target / path.name)
+    root = bench_demos(config, out)
     for name in config.tasks:
         t = task(name)
         for method in config.methods:

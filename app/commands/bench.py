@@ -25,7 +25,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--setting", default="teleported", choices=["teleported", "executed"],
                    help="teleported: the paper's judges; executed: whole jobs through IK, trajectories and the gripper")
     p.add_argument("--seed", type=int, default=0, help="the run's seed (objects, poses, noise, initialisations)")
-    p.add_argument("--nif", help="NIF weights for the nif and scf rows (default: the shipped field); Table III")
+    p.add_argument("--fields", "--nif", dest="nif",
+                   help="other field weights: a NIF .pt for the nif and scf rows (Table III), or a directory with "
+                        "nif.pt and ndf.pt for every template row (default: the shipped fields)")
     p.add_argument("--no-centering", "--no-center-grasp", dest="center_grasp", action="store_false",
                    help="judge the methods' poses as predicted: grasps not centred between the fingers, "
                         "hangs not centred on the peg (README)")
@@ -82,7 +84,7 @@ def run(args: argparse.Namespace) -> int:
         rows = run_bench(config, args.out, args.workers, progress, args.minutes)
     title = f"{args.setting} setting, {args.camera} camera, {args.demos} demos, seed {args.seed}"
     if args.nif:
-        title += f", NIF {args.nif}"
+        title += f", fields {args.nif}"
     summary = write_report(rows, list(tasks), list(poses), list(methods), args.out, title)
     if args.json:
         print(json.dumps(summary, indent=2))

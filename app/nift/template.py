@@ -41,10 +41,26 @@ QUERIES = ("ibs", "bps")
 FEATURES = {"nif": "nif", "ndf": "ndf", "scf": "nif"}  # feature kind -> the field it comes from
 
 
-def nif_override(feature: str, nif: str | Path | None) -> str | Path | None:
-    """Other NIF weights for a feature kind: `nif` for the kinds the NIF makes ("nif", "scf"), None
-    (the shipped field of the kind) otherwise."""
-    return nif if FEATURES[feature] == "nif" else None
+def field_override(feature: str, weights: str | Path | None) -> str | Path | None:
+    """Other weights for the field a feature kind comes from, None for the shipped one. `weights` is
+    a NIF file (it replaces the field of the "nif" and "scf" kinds) or a directory holding nif.pt and
+    ndf.pt (it replaces both fields)."""
+    if weights is None:
+        return None
+    kind = FEATURES[feature]
+    if Path(weights).is_dir():
+        path = Path(weights) / f"{kind}.pt"
+        if not path.is_file():
+            raise FileNotFoundError(f"no {kind}.pt in the fields directory {weights}")
+        return path
+    return weights if kind == "nif" else None
+
+
+def weights_id(weights: str | Path) -> str:
+    """The identity of a `field_override` argument: a file's `field_id`, or a directory's two."""
+    if Path(weights).is_dir():
+        return " ".join(field_id(field_override(f, weights)) for f in ("nif", "ndf"))
+    return field_id(weights)
 
 
 class StaleTemplate(ValueError):

@@ -1,0 +1,50 @@
+"""The demos a benchmark run imitates.
+
+The recorded ones (`demos/<task>/`, seen by the cell's Kinect) when the run uses all ten and the
+single camera. Otherwise a copy in `<out>/demos/<task>/`: the first `--demos N` of them, and with
+`--camera fused` each demo's cloud ray cast again from the four fused cameras at the demo object's
+recorded pose - in the paper's simulated setting demos and test objects are both seen fused, so a
+template built from single-view demo clouds would compare unlike with unlike. The copies are made
+once, before the workers start, and kept (a resumed run reuses them).
+"""
+from __future__ import annotations
+
+import dataclasses
+import shutil
+from pathlib import Path
+
+import numpy as np
+
+from app.bench.protocol import BenchConfig, trial_cloud
+from app.cell import CellConfig
+from app.demo import Demo, load_demo, save_demo
+from app.objects.catalog import generate
+from app.recorder import DEMOS_DIR
+from app.tasks import task
+
+
+def seen_by(demo: Demo, camera: str, cell: CellConfig, seed: int) -> Demo:
+    """The demo with its cloud as the camera setting sees its object at the recorded pose."""
+    mesh = generate(demo.category, demo.seed)
+    mesh.apply_scale(demo.scale)
+    cloud = trial_cloud(mesh, demo.T_base_obj, camera, np.random.default_rng(seed), cell)
+    return dataclasses.replace(demo, cloud=cloud)
+
+
+def bench_demos(config: BenchConfig, out: Path) -> Path:
+    """The directory whose `<task>/` folders hold the run's demos (made on first use)."""
+    if config.demos == 10 and config.camera == "single":
+        return DEMOS_DIR
+    root = out / "demos"
+    for name in sorted({task(t).demos for t in config.tasks}):
+        target = root / name
+        target.mkdir(parents=True, exist_ok=True)
+        for i, path in enumerate(sorted((DEMOS_DIR / name).glob("demo-*.npz"))[: config.demos]):
+            dest = target / path.name
+            if dest.exists():
+                continue
+            if config.camera == "single":
+                shutil.copy2(path, dest)
+            else:
+                save_demo(seen_by(load_demo(path), config.camera, config.cell, seed=i), dest)
+    return root
