@@ -14,6 +14,7 @@ import tempfile
 import numpy as np
 
 from app.anchors import anchor_mesh
+from app.bench import demos as bench_demos
 from app.bench import runner
 from app.bench.imitation import grasp_error, target
 from app.bench.protocol import BenchConfig
@@ -43,7 +44,7 @@ def single() -> None:
         root = pathlib.Path(tempfile.mkdtemp())
         (root / "bowl").mkdir()
         shutil.copy2(DEMOS_DIR / "bowl" / f"demo-{k:02d}.npz", root / "bowl")
-        runner.DEMOS_DIR = root  # the bench reads its demos from here (one process: workers=1)
+        bench_demos.DEMOS_DIR = root  # the bench reads its demos from here (one process: workers=1)
         rows = runner.run(config, pathlib.Path(tempfile.mkdtemp()), workers=1)
         print(k, summarise(rows, ["bowl"], ["upright"], ["ibs-nif"])["upright"]["ibs-nif"]["bowl"], flush=True)
 

@@ -1,7 +1,9 @@
 """Feasibility of imitated poses: the predicates on known geometry, and imitation honouring a predicate."""
 import numpy as np
 
-from app.feasibility import GRIP_POINTS, all_of, carries_like_demos, grips_something, reaches, reaches_at_place
+from app.feasibility import (GRIP_POINTS, all_of, carries_like_demos, grip_points, grips_something, point_spacing, reaches,
+                             reaches_at_place)
+from app.grasp_centering import swept_points
 from app.se3 import invert, make_pose, random_rotations, rotvec_to_matrix
 
 
@@ -15,6 +17,24 @@ def test_a_grasp_grips_something_only_with_points_between_the_fingers():
     assert grips_something(cloud)(np.stack([T, away, sideways])).tolist() == [True, False, False]
     few = cloud[:GRIP_POINTS - 1]
     assert not grips_something(few)(T[None])[0]
+
+
+def test_a_sparser_cloud_asks_for_fewer_points_between_the_fingers_for_the_same_surface():
+    """Grid clouds: spacing 2 mm and 4 mm keep the 20-point rule, 8 mm asks for a quarter of it."""
+    for spacing, need in ((0.002, GRIP_POINTS), (0.004, GRIP_POINTS), (0.008, GRIP_POINTS // 4)):
+        u = np.arange(0, 0.2, spacing)
+        grid = np.stack(np.meshgrid(u, u, [0.0]), -1).reshape(-1, 3)
+        assert abs(point_spacing(np.concatenate([grid, grid])) - spacing) < 1e-9  # repeated points do not count
+        assert grip_points(grid) == need
+    # a wall between the fingers (the TCP frame's x-z plane) at 8 mm spacing: fewer points than the
+    # dense rule asks, enough for the sparse one
+    T = make_pose(random_rotations(1, np.random.default_rng(2))[0], [0.4, 0.1, 0.2])
+    u = np.arange(-0.1, 0.1, 0.008)
+    wall = np.stack(np.meshgrid(u, [0.0], u), -1).reshape(-1, 3) @ T[:3, :3].T + T[:3, 3]
+    between = len(swept_points(T, wall))
+    assert grip_points(wall) <= between < GRIP_POINTS
+    assert grips_something(wall)(T[None])[0]
+    assert not grips_something(wall, min_points=4 * GRIP_POINTS)(T[None])[0]
 
 
 def test_a_place_that_turns_the_object_over_relative_to_the_grasp_is_not_carried_like_the_demos():
