@@ -129,6 +129,8 @@ def test_fused_runs_imitate_demos_seen_by_the_fused_cameras(tmp_path):
     from app.recorder import DEMOS_DIR
     from app.se3 import transform_points
 
+    with pytest.raises(ValueError, match="one Kinect"):
+        BenchConfig(camera="fused", setting="executed").check()
     root = bench_demos(BenchConfig(tasks=("mug",), demos=2, camera="fused"), tmp_path)
     assert bench_demos(BenchConfig(tasks=("mug",)), tmp_path) == DEMOS_DIR  # all ten, one camera: as recorded
     made = sorted((root / "mug").glob("demo-*.npz"))

@@ -60,6 +60,8 @@ class BenchConfig:
         if self.trials < 1 or not 1 <= self.demos <= 10:
             raise ValueError(f"--trials must be >= 1 and --demos 1..10 (got {self.trials}, {self.demos})")
         self.imitation(0)  # a bad --place-contact-scale fails here, in one line, not in the workers
+        if self.camera != "single" and self.setting == "executed":
+            raise ValueError("--setting executed runs the cell, which has one Kinect: use --camera single")
         if self.nif is not None and self.setting == "executed":
             raise ValueError("--fields applies to the teleported setting only (jobs use the shipped fields)")
 

@@ -27,7 +27,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--seed", type=int, default=0, help="the run's seed (objects, poses, noise, initialisations)")
     p.add_argument("--fields", "--nif", dest="nif",
                    help="other field weights: a NIF .pt for the nif and scf rows (Table III), or a directory with "
-                        "nif.pt and ndf.pt for every template row (default: the shipped fields)")
+                        "nif.pt and ndf.pt for every template row (default: the shipped fields; with --camera fused "
+                        "the fields trained on fused clouds, app/nift/weights/fused)")
     p.add_argument("--no-centering", "--no-center-grasp", dest="center_grasp", action="store_false",
                    help="judge the methods' poses as predicted: grasps not centred between the fingers, "
                         "hangs not centred on the peg (README)")
@@ -61,6 +62,7 @@ def run(args: argparse.Namespace) -> int:
     from app.bench.report import write_report
     from app.bench.runner import run as run_bench
     from app.methods import ORACLE, check_method
+    from app.nift.field import FUSED_FIELDS
     from app.spawn import POSES
     from app.tasks import task
 
@@ -72,6 +74,8 @@ def run(args: argparse.Namespace) -> int:
         if pose not in POSES:
             raise ValueError(f"unknown pose setting {pose!r}; choose from {', '.join(POSES)}")
     methods = tuple(m if m == ORACLE else check_method(m) for m in _names(args.methods))
+    if args.nif is None and args.camera == "fused" and args.setting == "teleported":
+        args.nif = str(FUSED_FIELDS)  # fields trained on what this setting sees (README, "Fused cameras")
     config = BenchConfig(tasks, poses, methods, args.trials, args.demos, args.camera, args.setting, args.seed,
                          args.nif, center_grasp=args.center_grasp, feasible=args.feasible,
                          place_contact_scale=args.place_contact_scale, place_demo_match=args.place_demo_match)

@@ -34,6 +34,7 @@ from app.nift.vn import VNInvariant, VNLeakyReLU, VNLinear, VNResnetBlock
 FORMAT = "nift-field/1"
 TARGETS = ("scf", "occ")
 WEIGHTS_DIR = Path(__file__).parent / "weights"
+FUSED_FIELDS = WEIGHTS_DIR / "fused"  # nif.pt + ndf.pt trained on four fused views (the paper's setting)
 SHIPPED = {"nif": "nif.pt", "ndf": "ndf.pt"}
 
 
