@@ -4,9 +4,9 @@
 as soon as a trial is done. Starting again with the same settings skips finished trials (a
 half-written last line from an interruption is ignored); other settings in the same directory are
 refused. Trials run index-major (trial 1 of every task and pose, then trial 2, ...), so a run
-stopped early - by its `minutes` budget or Ctrl-C - already makes a balanced table. Demo subsets (--demos N < 10) and fused-camera demos are written to `out/demos/<task>/`
-(app.bench.demos) and every template is built before the workers start, so that no two workers
-build the same template.
+stopped early - by its `minutes` budget or Ctrl-C - already makes a balanced table. Demo subsets
+(--demos N < 10) and fused-camera demos are written to `out/demos/<task>/` (app.bench.demos), and
+every template is built before the workers start, so that no two workers build the same one.
 """
 from __future__ import annotations
 
