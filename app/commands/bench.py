@@ -25,7 +25,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--setting", default="teleported", choices=["teleported", "executed"],
                    help="teleported: the paper's judges; executed: whole jobs through IK, trajectories and the gripper")
     p.add_argument("--seed", type=int, default=0, help="the run's seed (objects, poses, noise, initialisations)")
-    p.add_argument("--fields", "--nif", dest="nif",
+    p.add_argument("--fields", "--nif", dest="nif", metavar="PATH",
                    help="other field weights: a NIF .pt for the nif and scf rows (Table III), or a directory with "
                         "nif.pt and ndf.pt for every template row (default: the shipped fields; with --camera fused "
                         "the fields trained on fused clouds, app/nift/weights/fused)")
