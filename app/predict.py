@@ -71,9 +71,9 @@ def predict(t: Task, cloud: np.ndarray, method: str = "nift", T_base_fixture: np
     """Grasp pose and place motion for a target cloud (N, 3) in the base frame (`nif`: other field
     weights, a NIF file or a directory of nif.pt and ndf.pt (`field_override`), default the shipped
     ones; `center`: centre the grasp on the points between the fingers and a hang on the peg,
-    `app.grasp_centering` and `app.peg_centering`;
-    `feasible`: prefer feasible poses, `app.feasibility`; `reachable`: whether the cell can put its TCP
-    at a pose - given, a template method's feasible grasps and places are also ones it can reach)."""
+    `app.grasp_centering` and `app.peg_centering`; `feasible`: prefer feasible poses,
+    `app.feasibility`; `reachable`: whether the cell can put its TCP at a pose - given, a template
+    method's feasible grasps and places are also ones it can reach)."""
     pred = _predict(t, cloud, method, T_base_fixture, directory, config, nif, feasible, reachable)
     if center:
         pred.T_base_tcp = center_grasp(pred.T_base_tcp, cloud)

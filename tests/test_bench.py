@@ -129,8 +129,14 @@ def test_fused_runs_imitate_demos_seen_by_the_fused_cameras(tmp_path):
     from app.recorder import DEMOS_DIR
     from app.se3 import transform_points
 
+    from app.bench.runner import settings
+    from app.nift.field import FUSED_FIELDS
+
     with pytest.raises(ValueError, match="one Kinect"):
         BenchConfig(camera="fused", setting="executed").check()
+    fused = BenchConfig(camera="fused")  # its fields default to the ones trained on fused clouds
+    assert fused.fields == str(FUSED_FIELDS) and settings(fused)["nif"] == str(FUSED_FIELDS)
+    assert BenchConfig().fields is None and BenchConfig(camera="fused", nif="x.pt").fields == "x.pt"
     root = bench_demos(BenchConfig(tasks=("mug",), demos=2, camera="fused"), tmp_path)
     assert bench_demos(BenchConfig(tasks=("mug",)), tmp_path) == DEMOS_DIR  # all ten, one camera: as recorded
     made = sorted((root / "mug").glob("demo-*.npz"))

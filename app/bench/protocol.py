@@ -16,6 +16,7 @@ import numpy as np
 import trimesh
 
 from app.cell import CellConfig
+from app.nift.field import FUSED_FIELDS
 from app.nift.imitation_config import ImitationConfig
 from app.nift.raycast import scene_of
 from app.perception import resample
@@ -50,6 +51,14 @@ class BenchConfig:
     def imitation(self, index: int) -> ImitationConfig:
         """The optimiser settings of trial `index` (its seed is the index, as for every method)."""
         return ImitationConfig(seed=index, place_contact_scale=self.place_contact_scale, place_demo_match=self.place_demo_match)
+
+    @property
+    def fields(self) -> str | None:
+        """The field weights the template rows use (`nif`; unset, the fused fields with fused cameras,
+        else None: the shipped ones)."""
+        if self.nif is None and self.camera == "fused":
+            return str(FUSED_FIELDS)  # fields trained on what this setting sees (README, "Fused cameras")
+        return self.nif
 
     def check(self) -> None:
         """A one-line error for a setting this benchmark does not know."""

@@ -34,8 +34,9 @@ def settings(config: BenchConfig) -> dict:
     """What must match for a resume: everything but the cell's object identity."""
     d = asdict(config)
     d["cell"] = repr(config.cell)
-    if config.nif is not None:
-        d["nif_id"] = weights_id(config.nif)  # the hash: other weights at the same path do not resume
+    d["nif"] = config.fields  # as resolved: a fused run names the fused fields
+    if config.fields is not None:
+        d["nif_id"] = weights_id(config.fields)  # the hash: other weights at the same path do not resume
     return {"format": FORMAT, **d}
 
 
@@ -63,7 +64,7 @@ def prepare(config: BenchConfig, out: Path) -> Path:
         for method in config.methods:
             if method not in (ORACLE, "cpd"):
                 query, feature = check_method(method).split("-")
-                task_templates(t, root / t.demos, query, feature, nif=config.nif)
+                task_templates(t, root / t.demos, query, feature, nif=config.fields)
     return root
 
 

@@ -56,7 +56,7 @@ class TeleportedBench:
                     pred = teacher_prediction(t, obj.mesh, obj.scale, T_base_obj, T_base_fixture)
                 else:
                     pred = predict(t, cloud, method, T_base_fixture, demo_root / t.demos,
-                                   config.imitation(trial.index), config.nif, config.center_grasp,
+                                   config.imitation(trial.index), config.fields, config.center_grasp,
                                    config.feasible)
             except ValueError as exc:
                 rows.append({**base, "method": method, "grasp": False, "place": False, "overall": False,

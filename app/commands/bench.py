@@ -62,7 +62,6 @@ def run(args: argparse.Namespace) -> int:
     from app.bench.report import write_report
     from app.bench.runner import run as run_bench
     from app.methods import ORACLE, check_method
-    from app.nift.field import FUSED_FIELDS
     from app.spawn import POSES
     from app.tasks import task
 
@@ -74,8 +73,6 @@ def run(args: argparse.Namespace) -> int:
         if pose not in POSES:
             raise ValueError(f"unknown pose setting {pose!r}; choose from {', '.join(POSES)}")
     methods = tuple(m if m == ORACLE else check_method(m) for m in _names(args.methods))
-    if args.nif is None and args.camera == "fused" and args.setting == "teleported":
-        args.nif = str(FUSED_FIELDS)  # fields trained on what this setting sees (README, "Fused cameras")
     config = BenchConfig(tasks, poses, methods, args.trials, args.demos, args.camera, args.setting, args.seed,
                          args.nif, center_grasp=args.center_grasp, feasible=args.feasible,
                          place_contact_scale=args.place_contact_scale, place_demo_match=args.place_demo_match)
@@ -87,8 +84,8 @@ def run(args: argparse.Namespace) -> int:
 
         rows = run_bench(config, args.out, args.workers, progress, args.minutes)
     title = f"{args.setting} setting, {args.camera} camera, {args.demos} demos, seed {args.seed}"
-    if args.nif:
-        title += f", fields {args.nif}"
+    if config.fields:
+        title += f", fields {config.fields}"
     summary = write_report(rows, list(tasks), list(poses), list(methods), args.out, title)
     if args.json:
         print(json.dumps(summary, indent=2))
