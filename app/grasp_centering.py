@@ -27,14 +27,20 @@ from hardware.sim.gripper_model import GripperGeometry
 MIN_POINTS = 5  # fewer points between the fingers than this: nothing to centre on
 
 
-def swept_points(T_base_tcp: np.ndarray, cloud: np.ndarray, geometry: GripperGeometry = GripperGeometry()) -> np.ndarray:
-    """The cloud points (K, 3), in the TCP frame, inside the volume the closing fingers sweep."""
-    p = (np.asarray(cloud, float) - T_base_tcp[:3, 3]) @ T_base_tcp[:3, :3]  # (N, 3) TCP frame
+def swept_mask(T_base_tcp: np.ndarray, cloud: np.ndarray, geometry: GripperGeometry = GripperGeometry()) -> np.ndarray:
+    """(N,) bool: which cloud points lie inside the volume the closing fingers sweep."""
+    p = (np.asarray(cloud, float).reshape(-1, 3) - T_base_tcp[:3, 3]) @ T_base_tcp[:3, :3]  # (N, 3) TCP frame
     z0 = geometry.palm[2] - geometry.tcp_z  # where the fingers leave the palm, TCP frame
     z1 = z0 + geometry.finger[2]  # the fingertips
-    inside = ((np.abs(p[:, 0]) < geometry.finger[0] / 2) & (z0 < p[:, 2]) & (p[:, 2] < z1)
-              & (np.abs(p[:, 1]) < geometry.stroke / 2))
-    return p[inside]
+    return ((np.abs(p[:, 0]) < geometry.finger[0] / 2) & (z0 < p[:, 2]) & (p[:, 2] < z1)
+            & (np.abs(p[:, 1]) < geometry.stroke / 2))
+
+
+def swept_points(T_base_tcp: np.ndarray, cloud: np.ndarray, geometry: GripperGeometry = GripperGeometry()) -> np.ndarray:
+    """The cloud points (K, 3), in the TCP frame, inside the volume the closing fingers sweep."""
+    cloud = np.asarray(cloud, float).reshape(-1, 3)
+    p = (cloud - T_base_tcp[:3, 3]) @ T_base_tcp[:3, :3]  # (N, 3) TCP frame
+    return p[swept_mask(T_base_tcp, cloud, geometry)]
 
 
 def center_grasp(T_base_tcp: np.ndarray, cloud: np.ndarray, geometry: GripperGeometry = GripperGeometry(),

@@ -42,6 +42,7 @@ class JobConfig:
     # inside a bowl swept the far finger into its wall and dragged it off the shelf on the retreat
     demos: Path | None = None  # task directory (default demos/<task>)
     center_grasp: bool = True  # centre the grasp between the fingers and a hang on the peg (app.grasp_centering, app.peg_centering)
+    align_grasp: bool = True  # turn the grasp so the fingers close along the wall's normal (app.grasp_alignment)
     feasible: bool = True  # prefer grasps that close on something, places the grasp can carry to, and poses
     # the cell can reach (app.feasibility, app.motion.ik.reach_check)
     perception: PerceptionConfig = PerceptionConfig()
@@ -116,7 +117,8 @@ def run_job(t: Task, arm: Arm, gripper: Gripper, camera: DepthCamera, T_base_cam
         def predictor(cloud: np.ndarray) -> Prediction:
             reachable = reach_check(kin, scene, arm.getActualQ(), ignore=(OBJECT,))
             return predict(t, cloud, config.method, T_base_fixture, config.demos, config.imitation,
-                           center=config.center_grasp, feasible=config.feasible, reachable=reachable)
+                           center=config.center_grasp, feasible=config.feasible, reachable=reachable,
+                           align=config.align_grasp)
     try:
         _run(t, arm, gripper, camera, T_base_cam, T_base_fixture, scene, kin, config, hooks, predictor, result)
         result.arm = "home"

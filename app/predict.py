@@ -15,7 +15,9 @@ Template methods rank their candidate poses by feasibility first (`app.feasibili
 a grasp must close on cloud points, a place must be one the grasp could carry the object to as in
 the demos. Then both poses are centred on the cloud (our addition): the grasp on the points between
 the fingers (`app.grasp_centering`), a hang on the peg in the middle of the hole's gap
-(`app.peg_centering`; fixtures without a peg are left alone). On by default, for every method alike.
+(`app.peg_centering`; fixtures without a peg are left alone); and the grasp is turned so its
+fingers close along the normal of the wall between them (`app.grasp_alignment`, our addition).
+On by default, for every method alike.
 """
 from __future__ import annotations
 
@@ -26,6 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from app.feasibility import Reach, all_of, carries_like_demos, grips_something, reaches, reaches_at_place
+from app.grasp_alignment import align_grasp
 from app.grasp_centering import center_grasp
 from app.nift.cpd import best_registration
 from app.methods import check_method
@@ -67,14 +70,17 @@ class Prediction:
 def predict(t: Task, cloud: np.ndarray, method: str = "nift", T_base_fixture: np.ndarray | None = None,
             directory: Path | None = None, config: ImitationConfig = ImitationConfig(),
             nif: str | Path | None = None, center: bool = True, feasible: bool = True,
-            reachable: Reach | None = None) -> Prediction:
+            reachable: Reach | None = None, align: bool = True) -> Prediction:
     """Grasp pose and place motion for a target cloud (N, 3) in the base frame (`nif`: other field
     weights, a NIF file or a directory of nif.pt and ndf.pt (`field_override`), default the shipped
     ones; `center`: centre the grasp on the points between the fingers and a hang on the peg,
     `app.grasp_centering` and `app.peg_centering`; `feasible`: prefer feasible poses,
     `app.feasibility`; `reachable`: whether the cell can put its TCP at a pose - given, a template
-    method's feasible grasps and places are also ones it can reach)."""
+    method's feasible grasps and places are also ones it can reach; `align`: turn the grasp so the
+    fingers close along the normal of the wall between them, `app.grasp_alignment`)."""
     pred = _predict(t, cloud, method, T_base_fixture, directory, config, nif, feasible, reachable)
+    if align:  # squared up on the wall the (centred) fingers would close on
+        pred.T_base_tcp = align_grasp(center_grasp(pred.T_base_tcp, cloud) if center else pred.T_base_tcp, cloud)
     if center:
         pred.T_base_tcp = center_grasp(pred.T_base_tcp, cloud)
         seen = center_on_peg(pred.T_base_fixture_seen, cloud, fixture(t.fixture))

@@ -43,6 +43,7 @@ class BenchConfig:
     seed: int = 0
     nif: str | None = None  # other field weights (app.nift.template.field_override): a NIF .pt or a dir of nif.pt + ndf.pt
     center_grasp: bool = True  # centre every method's grasp between the fingers and hang on the peg (app.grasp_centering, app.peg_centering)
+    align_grasp: bool = True  # turn every method's grasp so the fingers close along the wall's normal (app.grasp_alignment)
     feasible: bool = True  # rank template methods' candidate poses by feasibility first (app.feasibility)
     place_contact_scale: float = ImitationConfig.place_contact_scale  # contact weighting of place templates; 0: the paper's
     place_demo_match: str = ImitationConfig.place_demo_match  # place poses against the demos' mean features or the nearest demo's

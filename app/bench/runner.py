@@ -26,7 +26,7 @@ from app.recorder import task_templates
 from app.tasks import task
 
 FORMAT = "nift-bench/1"
-ADDED = {"place_demo_match": "mean"}  # settings added since the format, with the value runs made before them had
+ADDED = {"place_demo_match": "mean", "align_grasp": False}  # settings added since the format, with the value runs made before them had
 _worker = None  # the per-process bench (a world, or the sim cell), made by _init_worker
 
 

@@ -32,6 +32,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--no-centering", "--no-center-grasp", dest="center_grasp", action="store_false",
                    help="judge the methods' poses as predicted: grasps not centred between the fingers, "
                         "hangs not centred on the peg (README)")
+    p.add_argument("--no-align-grasp", dest="align_grasp", action="store_false",
+                   help="leave grasps as predicted instead of turning them so the fingers close along the normal "
+                        "of the wall between them (README)")
     p.add_argument("--no-feasibility", dest="feasible", action="store_false",
                    help="take each template method's lowest-loss poses even where the fingers would close on "
                         "nothing or the place turns the object over relative to the grasp (README)")
@@ -74,7 +77,8 @@ def run(args: argparse.Namespace) -> int:
             raise ValueError(f"unknown pose setting {pose!r}; choose from {', '.join(POSES)}")
     methods = tuple(m if m == ORACLE else check_method(m) for m in _names(args.methods))
     config = BenchConfig(tasks, poses, methods, args.trials, args.demos, args.camera, args.setting, args.seed,
-                         args.nif, center_grasp=args.center_grasp, feasible=args.feasible,
+                         args.nif, center_grasp=args.center_grasp, align_grasp=args.align_grasp,
+                         feasible=args.feasible,
                          place_contact_scale=args.place_contact_scale, place_demo_match=args.place_demo_match)
     with tqdm(unit="trial", desc="bench", disable=args.json) as bar:
         def progress(done: int, total: int) -> None:

@@ -22,6 +22,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--no-centering", "--no-center-grasp", dest="center_grasp", action="store_false",
                    help="the poses as the optimisation found them: the grasp not centred between the "
                         "fingers, a hang not centred on the peg")
+    p.add_argument("--no-align-grasp", dest="align_grasp", action="store_false",
+                   help="the grasp not turned so the fingers close along the normal of the wall between them")
     p.add_argument("--no-feasibility", dest="feasible", action="store_false",
                    help="the lowest-loss poses even if the fingers close on nothing or the place turns the object over")
     p.add_argument("--json", action="store_true", help="print the poses and losses as JSON")
@@ -38,7 +40,7 @@ def run(args: argparse.Namespace) -> int:
 
     cloud = load_cloud(args.cloud)
     pred = predict(task(args.task), cloud, args.method, directory=args.demos, config=imitation_config(args),
-                   center=args.center_grasp, feasible=args.feasible)
+                   center=args.center_grasp, feasible=args.feasible, align=args.align_grasp)
     if args.json:
         print(json.dumps(pred.record(), indent=2))
         return 0
