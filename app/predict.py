@@ -79,8 +79,11 @@ def predict(t: Task, cloud: np.ndarray, method: str = "nift", T_base_fixture: np
     method's feasible grasps and places are also ones it can reach; `align`: turn the grasp so the
     fingers close along the normal of the wall between them, `app.grasp_alignment`)."""
     pred = _predict(t, cloud, method, T_base_fixture, directory, config, nif, feasible, reachable)
-    if align:  # squared up on the wall the (centred) fingers would close on
-        pred.T_base_tcp = align_grasp(center_grasp(pred.T_base_tcp, cloud) if center else pred.T_base_tcp, cloud)
+    if align:  # squared up on the wall the (centred) fingers would close on; unturned, left as predicted
+        seen = center_grasp(pred.T_base_tcp, cloud) if center else pred.T_base_tcp
+        turned = align_grasp(seen, cloud)
+        if not np.array_equal(turned, seen):
+            pred.T_base_tcp = turned  # centred again below (what lies between the fingers moved)
     if center:
         pred.T_base_tcp = center_grasp(pred.T_base_tcp, cloud)
         seen = center_on_peg(pred.T_base_fixture_seen, cloud, fixture(t.fixture))
