@@ -79,18 +79,25 @@ def predict(t: Task, cloud: np.ndarray, method: str = "nift", T_base_fixture: np
     method's feasible grasps and places are also ones it can reach; `align`: turn the grasp so the
     fingers close along the normal of the wall between them, `app.grasp_alignment`)."""
     pred = _predict(t, cloud, method, T_base_fixture, directory, config, nif, feasible, reachable)
-    if align:  # squared up on the wall the (centred) fingers would close on; unturned, left as predicted
-        seen = center_grasp(pred.T_base_tcp, cloud) if center else pred.T_base_tcp
-        turned = align_grasp(seen, cloud)
-        if not np.array_equal(turned, seen):
-            pred.T_base_tcp = turned  # centred again below (what lies between the fingers moved)
+    pred.T_base_tcp = refine_grasp(pred.T_base_tcp, cloud, center, align)
     if center:
-        pred.T_base_tcp = center_grasp(pred.T_base_tcp, cloud)
         seen = center_on_peg(pred.T_base_fixture_seen, cloud, fixture(t.fixture))
         if not np.array_equal(seen, pred.T_base_fixture_seen):  # unmoved (the shelf): keep the motion bit for bit
             pred.motion = pred.motion @ pred.T_base_fixture_seen @ invert(seen)  # T_base_fixture @ inv(seen)
             pred.T_base_fixture_seen = seen
     return pred
+
+
+def refine_grasp(T_base_tcp: np.ndarray, cloud: np.ndarray, center: bool = True, align: bool = True) -> np.ndarray:
+    """A predicted grasp turned onto the wall its (centred) fingers would close on (`align`), then
+    centred between them (`center`); a grasp the alignment leaves unturned is centred once, as without it."""
+    seen = center_grasp(T_base_tcp, cloud) if center else T_base_tcp
+    if not align:
+        return seen
+    turned = align_grasp(seen, cloud)
+    if np.array_equal(turned, seen):
+        return seen
+    return center_grasp(turned, cloud) if center else turned  # what lies between the fingers moved
 
 
 def _predict(t: Task, cloud: np.ndarray, method: str, T_base_fixture: np.ndarray | None, directory: Path | None,

@@ -89,16 +89,18 @@ def test_other_settings_in_the_same_directory_are_refused(tmp_path):
 
 
 def test_a_run_made_before_a_setting_existed_resumes_as_its_old_value_and_only_as_that(tmp_path):
-    """run.json files from before `place_demo_match` lack it: they ran the mean, so that resumes them."""
+    """run.json files from before `place_demo_match` and `align_grasp` lack them: they ran the mean
+    and unaligned grasps, so those settings resume them and the others are refused."""
     from app.bench.runner import ADDED, prepare, settings
 
     config = BenchConfig(tasks=("mug",), methods=("cpd",), trials=1)
     older = {k: v for k, v in settings(config).items() if k not in ADDED}
     (tmp_path / "run.json").write_text(json.dumps(older))
-    prepare(replace(config, place_demo_match="mean"), tmp_path)
-    (tmp_path / "run.json").write_text(json.dumps(older))
-    with pytest.raises(ValueError, match="other settings"):
-        prepare(replace(config, place_demo_match="nearest"), tmp_path)
+    prepare(replace(config, place_demo_match="mean", align_grasp=False), tmp_path)
+    for other in ({"place_demo_match": "nearest"}, {"align_grasp": True}):
+        (tmp_path / "run.json").write_text(json.dumps(older))
+        with pytest.raises(ValueError, match="other settings"):
+            prepare(replace(config, **{**ADDED, **other}), tmp_path)
 
 
 def test_fused_cameras_see_more_of_the_object_than_the_cells_one():

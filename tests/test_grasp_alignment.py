@@ -95,3 +95,20 @@ def test_a_rim_grasp_tilted_across_the_wall_slips_and_aligned_holds(category, ti
         assert verdicts[1].success, verdicts[1].reason
     finally:
         world.disconnect()
+
+
+def test_predictions_are_turned_then_centred_and_an_unturned_grasp_is_centred_once():
+    from app.predict import refine_grasp
+
+    T = _pose(6)
+    beyond = _wall(0.0, n=100, seed=1) * [0.5, 1.0, 0.5] + [0.0, 0.045, 0.0]  # just past the open fingers
+    square = transform_points(T, np.vstack([_wall(0.0) + [0.0, 0.006, 0.0], beyond]))  # off-centre, square
+    assert not np.array_equal(center_grasp(center_grasp(T, square), square), center_grasp(T, square))  # reached once moved
+    np.testing.assert_array_equal(refine_grasp(T, square), center_grasp(T, square))
+    np.testing.assert_array_equal(refine_grasp(T, square, center=False, align=False), T)
+    tilted = transform_points(T, _wall(20.0) + [0.0, 0.006, 0.0])
+    out = refine_grasp(T, tilted)
+    normal = T[:3, :3] @ rotvec_to_matrix([np.radians(20.0), 0.0, 0.0])[:, 1]
+    assert _angle(out[:3, 1], normal) < 1.5
+    seen = (tilted - out[:3, 3]) @ out[:3, :3]  # TCP frame: the wall's middle along y is at the TCP
+    assert abs(np.median(seen[:, 1])) < 1e-3
