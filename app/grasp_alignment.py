@@ -51,12 +51,15 @@ def align_grasp(T_base_tcp: np.ndarray, cloud: np.ndarray, normals: np.ndarray |
     if inside.sum() < min_points:
         return T_base_tcp.copy()
     n = normals[inside] if normals is not None else surface_normals(cloud)[inside]  # (K, 3)
+    n = n[np.isfinite(n).all(axis=1) & (np.linalg.norm(n, axis=1) > 0.5)]  # degenerate neighbourhoods give none
+    if len(n) < min_points:
+        return T_base_tcp.copy()
     y = T_base_tcp[:3, 1]
     d = wall_direction(n)
     d = d if d @ y >= 0 else -d
     axis = np.cross(y, d)
     angle = float(np.arctan2(np.linalg.norm(axis), y @ d))
-    if angle < 1e-9 or angle > max_angle:
+    if not 1e-9 <= angle <= max_angle:
         return T_base_tcp.copy()
     out = T_base_tcp.copy()
     out[:3, :3] = Rotation.from_rotvec(axis / np.linalg.norm(axis) * angle).as_matrix() @ T_base_tcp[:3, :3]

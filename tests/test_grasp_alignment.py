@@ -56,6 +56,9 @@ def test_a_square_grasp_few_points_and_large_turns_are_left_alone():
     np.testing.assert_array_equal(align_grasp(T, few, normals=np.tile(T[:3, 2], (len(few), 1))), T)
     steep = transform_points(T, _wall(np.degrees(MAX_ANGLE) + 15.0))
     np.testing.assert_array_equal(align_grasp(T, steep), T)
+    tilted = transform_points(T, _wall(20.0))
+    unknown = np.full_like(tilted, np.nan)  # no usable normal anywhere
+    np.testing.assert_array_equal(align_grasp(T, tilted, normals=unknown), T)
 
 
 def test_given_normals_are_used_and_match_open3d():
