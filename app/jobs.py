@@ -42,7 +42,8 @@ class JobConfig:
     # inside a bowl swept the far finger into its wall and dragged it off the shelf on the retreat
     demos: Path | None = None  # task directory (default demos/<task>)
     center_grasp: bool = True  # centre the grasp between the fingers and a hang on the peg (app.grasp_centering, app.peg_centering)
-    align_grasp: bool = True  # turn the grasp so the fingers close along the wall's normal (app.grasp_alignment)
+    align_grasp: bool = False  # turn the grasp square to the wall between the fingers (app.grasp_alignment): off, as
+    # one Kinect's normals at a rim are too far off (README, "Grasp alignment")
     feasible: bool = True  # prefer grasps that close on something, places the grasp can carry to, and poses
     # the cell can reach (app.feasibility, app.motion.ik.reach_check)
     perception: PerceptionConfig = PerceptionConfig()

@@ -15,9 +15,10 @@ Template methods rank their candidate poses by feasibility first (`app.feasibili
 a grasp must close on cloud points, a place must be one the grasp could carry the object to as in
 the demos. Then both poses are centred on the cloud (our addition): the grasp on the points between
 the fingers (`app.grasp_centering`), a hang on the peg in the middle of the hole's gap
-(`app.peg_centering`; fixtures without a peg are left alone); and the grasp is turned so its
-fingers close along the normal of the wall between them (`app.grasp_alignment`, our addition).
-On by default, for every method alike.
+(`app.peg_centering`; fixtures without a peg are left alone) - on by default, for every method
+alike. Optionally (`align`, off by default: it needs the normals a fused cloud gives and one
+Kinect view does not) the grasp is first turned so its fingers close along the normal of the wall
+between them (`app.grasp_alignment`, our addition).
 """
 from __future__ import annotations
 
@@ -70,7 +71,7 @@ class Prediction:
 def predict(t: Task, cloud: np.ndarray, method: str = "nift", T_base_fixture: np.ndarray | None = None,
             directory: Path | None = None, config: ImitationConfig = ImitationConfig(),
             nif: str | Path | None = None, center: bool = True, feasible: bool = True,
-            reachable: Reach | None = None, align: bool = True) -> Prediction:
+            reachable: Reach | None = None, align: bool = False) -> Prediction:
     """Grasp pose and place motion for a target cloud (N, 3) in the base frame (`nif`: other field
     weights, a NIF file or a directory of nif.pt and ndf.pt (`field_override`), default the shipped
     ones; `center`: centre the grasp on the points between the fingers and a hang on the peg,

@@ -139,6 +139,9 @@ def test_fused_runs_imitate_demos_seen_by_the_fused_cameras(tmp_path):
     fused = BenchConfig(camera="fused")  # its fields default to the ones trained on fused clouds
     assert fused.fields == str(FUSED_FIELDS) and settings(fused)["nif"] == str(FUSED_FIELDS)
     assert BenchConfig().fields is None and BenchConfig(camera="fused", nif="x.pt").fields == "x.pt"
+    assert fused.aligns and settings(fused)["align_grasp"] is True  # grasp alignment: fused clouds' normals only
+    assert not BenchConfig().aligns and settings(BenchConfig())["align_grasp"] is False
+    assert BenchConfig(align_grasp=True).aligns and not BenchConfig(camera="fused", align_grasp=False).aligns
     root = bench_demos(BenchConfig(tasks=("mug",), demos=2, camera="fused"), tmp_path)
     assert bench_demos(BenchConfig(tasks=("mug",)), tmp_path) == DEMOS_DIR  # all ten, one camera: as recorded
     made = sorted((root / "mug").glob("demo-*.npz"))

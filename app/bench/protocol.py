@@ -43,7 +43,7 @@ class BenchConfig:
     seed: int = 0
     nif: str | None = None  # other field weights (app.nift.template.field_override): a NIF .pt or a dir of nif.pt + ndf.pt
     center_grasp: bool = True  # centre every method's grasp between the fingers and hang on the peg (app.grasp_centering, app.peg_centering)
-    align_grasp: bool = True  # turn every method's grasp so the fingers close along the wall's normal (app.grasp_alignment)
+    align_grasp: bool | None = None  # turn every method's grasp square to the wall between the fingers (app.grasp_alignment); None: `aligns`
     feasible: bool = True  # rank template methods' candidate poses by feasibility first (app.feasibility)
     place_contact_scale: float = ImitationConfig.place_contact_scale  # contact weighting of place templates; 0: the paper's
     place_demo_match: str = ImitationConfig.place_demo_match  # place poses against the demos' mean features or the nearest demo's
@@ -60,6 +60,12 @@ class BenchConfig:
         if self.nif is None and self.camera == "fused":
             return str(FUSED_FIELDS)  # fields trained on what this setting sees (README, "Fused cameras")
         return self.nif
+
+    @property
+    def aligns(self) -> bool:
+        """Whether grasps are turned square to the wall between the fingers (`align_grasp`; unset, with
+        fused cameras only: one Kinect's normals at a rim are 4-26 degrees off the mesh's, README)."""
+        return self.camera == "fused" if self.align_grasp is None else self.align_grasp
 
     def check(self) -> None:
         """A one-line error for a setting this benchmark does not know."""

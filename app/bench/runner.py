@@ -35,6 +35,7 @@ def settings(config: BenchConfig) -> dict:
     d = asdict(config)
     d["cell"] = repr(config.cell)
     d["nif"] = config.fields  # as resolved: a fused run names the fused fields
+    d["align_grasp"] = config.aligns  # as resolved: on with fused cameras
     if config.fields is not None:
         d["nif_id"] = weights_id(config.fields)  # the hash: other weights at the same path do not resume
     return {"format": FORMAT, **d}

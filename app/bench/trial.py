@@ -57,7 +57,7 @@ class TeleportedBench:
                 else:
                     pred = predict(t, cloud, method, T_base_fixture, demo_root / t.demos,
                                    config.imitation(trial.index), config.fields, config.center_grasp,
-                                   config.feasible, align=config.align_grasp)
+                                   config.feasible, align=config.aligns)
             except ValueError as exc:
                 rows.append({**base, "method": method, "grasp": False, "place": False, "overall": False,
                              "why": f"no prediction: {exc}", "seconds": round(time.perf_counter() - start, 2)})
@@ -101,7 +101,7 @@ class ExecutedBench:
         for method in config.methods:
             job = JobConfig(method=method, demos=demo_root / t.demos, imitation=config.imitation(trial.index),
                             center_grasp=config.center_grasp, feasible=config.feasible,
-                            align_grasp=config.align_grasp)
+                            align_grasp=config.aligns)
             r = run_sim_job(self.sim, self.scene, self.T_base_cam, JobSpec(t, tuple(trial.seed(config.seed)), trial.pose), job)
             failed = r.failed_stage or ""
             grasp = r.success or failed in ("place", "release", "retreat", "verify")  # held through the carry

@@ -32,9 +32,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--no-centering", "--no-center-grasp", dest="center_grasp", action="store_false",
                    help="judge the methods' poses as predicted: grasps not centred between the fingers, "
                         "hangs not centred on the peg (README)")
-    p.add_argument("--no-align-grasp", dest="align_grasp", action="store_false",
-                   help="leave grasps as predicted instead of turning them so the fingers close along the normal "
-                        "of the wall between them (README)")
+    p.add_argument("--align-grasp", action=argparse.BooleanOptionalAction, default=None,
+                   help="turn every method's grasp so the fingers close along the normal of the wall between them "
+                        "(default: with --camera fused only; README)")
     p.add_argument("--no-feasibility", dest="feasible", action="store_false",
                    help="take each template method's lowest-loss poses even where the fingers would close on "
                         "nothing or the place turns the object over relative to the grasp (README)")
