@@ -80,7 +80,7 @@ def predict(t: Task, cloud: np.ndarray, method: str = "nift", T_base_fixture: np
     method's feasible grasps and places are also ones it can reach; `align`: turn the grasp so the
     fingers close along the normal of the wall between them, `app.grasp_alignment`)."""
     pred = _predict(t, cloud, method, T_base_fixture, directory, config, nif, feasible, reachable)
-    pred.T_base_tcp = refine_grasp(pred.T_base_tcp, cloud, center, align)
+    pred.T_base_tcp = refine_grasp(pred.T_base_tcp, cloud, center=center, align=align)
     if center:
         seen = center_on_peg(pred.T_base_fixture_seen, cloud, fixture(t.fixture))
         if not np.array_equal(seen, pred.T_base_fixture_seen):  # unmoved (the shelf): keep the motion bit for bit
@@ -89,7 +89,7 @@ def predict(t: Task, cloud: np.ndarray, method: str = "nift", T_base_fixture: np
     return pred
 
 
-def refine_grasp(T_base_tcp: np.ndarray, cloud: np.ndarray, center: bool = True, align: bool = True) -> np.ndarray:
+def refine_grasp(T_base_tcp: np.ndarray, cloud: np.ndarray, *, center: bool, align: bool) -> np.ndarray:
     """A predicted grasp turned onto the wall its (centred) fingers would close on (`align`), then
     centred between them (`center`); a grasp the alignment leaves unturned is centred once, as without it."""
     seen = center_grasp(T_base_tcp, cloud) if center else T_base_tcp

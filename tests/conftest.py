@@ -12,3 +12,33 @@ def nift_cache(tmp_path, monkeypatch):
     """A private, empty cache directory so collision models are really computed."""
     monkeypatch.setenv("NIFT_CACHE", str(tmp_path / "cache"))
     return tmp_path / "cache"
+
+
+@pytest.fixture
+def teacher_grasp_verdicts():
+    """judge(category, T_tcp_offset, refinements) -> the grasp judge's verdict for each refinement
+    ((T_world_tcp, cloud) -> T_world_tcp) of the scripted teacher's grasp on the first upright test
+    object, moved by T_tcp_offset (TCP frame); the cloud is 20,000 points of the object's surface."""
+    from app.judges import judge_grasp
+    from app.objects import split
+    from app.se3 import make_pose, transform_points
+    from app.spawn import spawn
+    from app.tasks import teacher_grasp
+    from hardware.sim.world import SimWorld, SimWorldConfig
+
+    world = SimWorld(SimWorldConfig())
+    world.connect()
+
+    def judge(category, T_tcp_offset, refinements):
+        verdicts = []
+        for refine in refinements:
+            obj = spawn(world, category, split(category, "test")[0], "upright",
+                        T_world_obj=make_pose(np.eye(3), [0.5, 0.0, 0.0]))
+            T_world_obj = world.pose(obj.body)
+            cloud = transform_points(T_world_obj, obj.mesh.sample(20000, seed=0))
+            verdicts.append(judge_grasp(world, obj, refine(T_world_obj @ teacher_grasp(obj.mesh) @ T_tcp_offset, cloud)))
+            world.remove(obj.body)
+        return verdicts
+
+    yield judge
+    world.disconnect()
