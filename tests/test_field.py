@@ -3,7 +3,9 @@ import numpy as np
 import pytest
 import torch
 
-from app.nift.field import FieldConfig, NeuralField, field_path, load_field, read_card, save_field
+from dataclasses import asdict
+
+from app.nift.field import WEIGHTS_DIR, FieldConfig, NeuralField, field_path, load_field, read_card, save_field
 from app.se3 import random_rotations
 from app.training.data import DataConfig, make_dataset
 from app.training.dataset import FieldData
@@ -93,6 +95,21 @@ def test_shipped_weights_carry_model_cards():
         assert card["target"] == target == load_field(name).config.target
         assert card["training"]["seconds"] > 0 and card["data"]["samples"] > 0
         assert field_path(name).stat().st_size < 10e6
+
+
+def test_every_shipped_weights_file_matches_its_card():
+    """Fused, gpu2 and Table III's per-order NIFs too: the card's target and SCF order are the net's."""
+    paths = sorted(WEIGHTS_DIR.rglob("*.pt"))
+    assert {p.parent.name for p in paths} >= {"weights", "fused", "gpu2", "table3"}
+    for path in paths:
+        card, field = read_card(path), load_field(path)
+        config, arch = asdict(field.config), card["architecture"]
+        assert {k: arch[k] for k in config} == config, path
+        assert arch["parameters"] == sum(t.numel() for t in field.parameters()), path
+        out = field.head(field.encode(torch.randn(1, 64, 3) * 0.05), torch.zeros(1, 4, 3))  # (1, 4, out_dim)
+        assert out.shape == (1, 4, field.config.out_dim), path
+    orders = [load_field(WEIGHTS_DIR / "table3" / f"nif-{n}.pt").config.scf_order for n in (1, 3, 5, 7, 10)]
+    assert orders == [1, 3, 5, 7, 10]
 
 
 # Thresholds from the shipped fields on this 24-sample draw of unseen instances, fed 1,024-point clouds

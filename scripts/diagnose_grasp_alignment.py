@@ -1,0 +1,82 @@
+"""How far grasp alignment turns the scripted teacher's (square) grasps, by where the normals come from:
+the mesh itself (its face normals), four fused cameras, or the cell's one Kinect (README, "Grasp alignment").
+
+Usage (repo root): .venv/bin/python scripts/diagnose_grasp_alignment.py TASK POSE TRIAL... [--seed 0]
+e.g. `bowl upright 0-8` (about 1 s per trial). The trials are `nift bench`'s: the same objects, poses
+and clouds. A teacher grasp closes square to the rim's wall, so every degree of turn is an error of
+the normals; the bench aligns grasps where this stays small (fused) and not where it does not (single).
+"""
+import argparse
+
+import numpy as np
+import trimesh
+
+from app.bench.protocol import BenchConfig, Trial, trial_cloud
+from app.bench.trial import TeleportedBench
+from app.grasp_alignment import align_grasp
+from app.grasp_centering import swept_mask
+from app.sim_jobs import spawn_test_object
+from app.tasks import task, teacher_grasp
+
+SOURCES = ("mesh", "fused", "single")
+
+
+def indices(specs: list[str]) -> list[int]:
+    """'3' -> [3]; '0-25' -> 0..24."""
+    out = []
+    for s in specs:
+        a, _, b = s.partition("-")
+        out.extend(range(int(a), int(b)) if b else [int(a)])
+    return out
+
+
+def turn_degrees(T: np.ndarray, cloud: np.ndarray, normals: np.ndarray | None = None) -> float:
+    """Angle (degrees) the closing axis turns onto the normals' wall axis (no cap); NaN: nothing between the fingers."""
+    if not swept_mask(T, cloud).any():
+        return float("nan")
+    y = align_grasp(T, cloud, normals, max_angle=np.pi / 2)[:3, 1]
+    return float(np.degrees(np.arccos(np.clip(y @ T[:3, 1], -1.0, 1.0))))
+
+
+def trial_turns(bench: TeleportedBench, t, pose: str, index: int, seed: int) -> dict[str, float]:
+    """The teacher grasp's turn on each source's cloud for one bench trial."""
+    turns = {}
+    for source in SOURCES:
+        rng = np.random.default_rng(Trial(t.name, pose, index).seed(seed))  # as TeleportedBench.run draws it
+        obj = spawn_test_object(bench.world, t, pose, rng)
+        T_base_obj = bench.world.pose(obj.body)
+        bench.world.remove(obj.body)
+        T = T_base_obj @ teacher_grasp(obj.mesh)
+        if source == "mesh":
+            posed = obj.mesh.copy().apply_transform(T_base_obj)
+            points, faces = trimesh.sample.sample_surface(posed, 4096, seed=index)
+            turns[source] = turn_degrees(T, points, posed.face_normals[faces])
+        else:
+            turns[source] = turn_degrees(T, trial_cloud(obj.mesh, T_base_obj, source, rng, bench.cell))
+    return turns
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("task")
+    parser.add_argument("pose")
+    parser.add_argument("trials", nargs="+")
+    parser.add_argument("--seed", type=int, default=0)
+    args = parser.parse_args()
+    config = BenchConfig(tasks=(args.task,), seed=args.seed)
+    bench = TeleportedBench(config.cell)
+    t = task(args.task)
+    rows = []
+    for i in indices(args.trials):
+        turns = trial_turns(bench, t, args.pose, i, args.seed)
+        rows.append([turns[s] for s in SOURCES])
+        print(f"{t.name} {args.pose} {i}: " + "  ".join(f"{s} {turns[s]:5.1f}" for s in SOURCES), flush=True)
+    table = np.array(rows)  # (trials, sources)
+    for s, column in zip(SOURCES, table.T):
+        done = column[np.isfinite(column)]
+        if len(done):
+            print(f"{s:>6}: median {np.median(done):.1f}, max {done.max():.1f} degrees over {len(done)} grasps")
+
+
+if __name__ == "__main__":
+    main()
