@@ -16,8 +16,9 @@ and the gripper turns about its TCP by the smallest rotation taking its closing 
 `max_angle` (then the fingers close on something other than one wall - nothing to square up to).
 
 It needs normals that are right: on fused clouds the teacher's own (square) bowl and mug grasps
-turn by 1-17 degrees, on one Kinect view's by 1-26, and there it lost more grasps than it mended
-(README, "Grasp alignment") - so callers turn it on for fused clouds only.
+turn by a median of 3-7 degrees (at most 18), on one Kinect view's by 2-10 (at most 89), and there
+it lost more grasps than it mended (README, "Grasp alignment"; `scripts/diagnose_grasp_alignment.py`)
+- so callers turn it on for fused clouds only.
 """
 from __future__ import annotations
 

@@ -64,7 +64,7 @@ class BenchConfig:
     @property
     def aligns(self) -> bool:
         """Whether grasps are turned square to the wall between the fingers (`align_grasp`; unset, with
-        fused cameras only: one Kinect's normals at a rim are 4-26 degrees off the mesh's, README)."""
+        fused cameras only: one Kinect's normals at a rim are off the mesh's by a median 2-10 degrees, README)."""
         return self.camera == "fused" if self.align_grasp is None else self.align_grasp
 
     def check(self) -> None:
