@@ -11,23 +11,13 @@ import argparse
 import numpy as np
 import trimesh
 
-from app.bench.protocol import BenchConfig, Trial, trial_cloud
+from app.bench.protocol import BenchConfig, Trial, parse_indices
 from app.bench.trial import TeleportedBench
 from app.grasp_alignment import align_grasp
 from app.grasp_centering import swept_mask
-from app.sim_jobs import spawn_test_object
 from app.tasks import task, teacher_grasp
 
 SOURCES = ("mesh", "fused", "single")
-
-
-def indices(specs: list[str]) -> list[int]:
-    """'3' -> [3]; '0-25' -> 0..24."""
-    out = []
-    for s in specs:
-        a, _, b = s.partition("-")
-        out.extend(range(int(a), int(b)) if b else [int(a)])
-    return out
 
 
 def turn_degrees(T: np.ndarray, cloud: np.ndarray, normals: np.ndarray | None = None) -> float:
@@ -42,17 +32,15 @@ def trial_turns(bench: TeleportedBench, t, pose: str, index: int, seed: int) -> 
     """The teacher grasp's turn on each source's cloud for one bench trial."""
     turns = {}
     for source in SOURCES:
-        rng = np.random.default_rng(Trial(t.name, pose, index).seed(seed))  # as TeleportedBench.run draws it
-        obj = spawn_test_object(bench.world, t, pose, rng)
-        T_base_obj = bench.world.pose(obj.body)
-        bench.world.remove(obj.body)
+        camera = "single" if source == "mesh" else source  # the mesh source needs the object alone
+        obj, T_base_obj, cloud = bench.observe(Trial(t.name, pose, index), camera, seed)
         T = T_base_obj @ teacher_grasp(obj.mesh)
         if source == "mesh":
             posed = obj.mesh.copy().apply_transform(T_base_obj)
             points, faces = trimesh.sample.sample_surface(posed, 4096, seed=index)
             turns[source] = turn_degrees(T, points, posed.face_normals[faces])
         else:
-            turns[source] = turn_degrees(T, trial_cloud(obj.mesh, T_base_obj, source, rng, bench.cell))
+            turns[source] = turn_degrees(T, cloud)
     return turns
 
 
@@ -67,7 +55,7 @@ def main() -> None:
     bench = TeleportedBench(config.cell)
     t = task(args.task)
     rows = []
-    for i in indices(args.trials):
+    for i in parse_indices(args.trials):
         turns = trial_turns(bench, t, args.pose, i, args.seed)
         rows.append([turns[s] for s in SOURCES])
         print(f"{t.name} {args.pose} {i}: " + "  ".join(f"{s} {turns[s]:5.1f}" for s in SOURCES), flush=True)

@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from app.bench.demos import bench_demos
-from app.bench.protocol import BenchConfig, Trial, trial_cloud
+from app.bench.protocol import BenchConfig, Trial, parse_indices
 from app.bench.trial import TeleportedBench
 from app.feasibility import grips_something
 from app.grasp_centering import center_grasp, swept_points
@@ -24,17 +24,7 @@ from app.nift.field import load_field
 from app.nift.imitate import imitate
 from app.nift.template import FEATURES, field_override
 from app.recorder import task_templates
-from app.sim_jobs import spawn_test_object
 from app.tasks import task
-
-
-def indices(specs: list[str]) -> list[int]:
-    """'3' -> [3]; '0-25' -> 0..24."""
-    out = []
-    for s in specs:
-        a, _, b = s.partition("-")
-        out.extend(range(int(a), int(b)) if b else [int(a)])
-    return out
 
 
 parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -51,13 +41,9 @@ root = bench_demos(config, Path(args.demos_out or tempfile.mkdtemp()))
 template = task_templates(t, root / t.demos, "ibs", "nif", nif=config.fields)["grasp"]
 field = load_field(field_override("nif", config.fields) or FEATURES["nif"])
 best_holds = some_holds = 0
-picked = indices(args.trials)
+picked = parse_indices(args.trials)
 for i in picked:
-    rng = np.random.default_rng(Trial(t.name, args.pose, i).seed(config.seed))  # as TeleportedBench.run draws it
-    obj = spawn_test_object(bench.world, t, args.pose, rng)
-    T_base_obj = bench.world.pose(obj.body)
-    bench.world.remove(obj.body)
-    cloud = trial_cloud(obj.mesh, T_base_obj, config.camera, rng, bench.cell)
+    obj, T_base_obj, cloud = bench.observe(Trial(t.name, args.pose, i), config.camera, config.seed)
     found = imitate(template, cloud, config.imitation(i), field, grips_something(cloud))
     marks, held = [], []
     for k in ([found.best] + [k for k in np.argsort(found.losses) if k != found.best])[:6]:

@@ -12,11 +12,9 @@ from pathlib import Path
 
 import numpy as np
 
-from app.bench.protocol import BenchConfig, Trial, trial_cloud
+from app.bench.protocol import BenchConfig, Trial
 from app.bench.trial import TeleportedBench
 from app.se3 import invert
-from app.sim_jobs import spawn_test_object
-from app.tasks import task
 
 BINS = ((0, 1), (1, 30), (30, 10**6))  # cloud points on the handle
 WALL_MARGIN = 0.004  # metres beyond the body's outer radius where the handle starts
@@ -41,14 +39,10 @@ def main() -> None:
     placed = {(r["pose"], r["index"]): r["place"] for r in rows if r["task"] == "mug" and r["method"] == args.method}
     if not placed:
         raise SystemExit(f"{args.run} has no mug trials of {args.method}")
-    bench, t = TeleportedBench(config.cell), task("mug")
+    bench = TeleportedBench(config.cell)
     seen: dict[str, list[tuple[int, bool]]] = {}
     for (pose, i), ok in sorted(placed.items()):
-        rng = np.random.default_rng(Trial(t.name, pose, i).seed(config.seed))  # as TeleportedBench.run draws it
-        obj = spawn_test_object(bench.world, t, pose, rng)
-        T_base_obj = bench.world.pose(obj.body)
-        bench.world.remove(obj.body)
-        cloud = trial_cloud(obj.mesh, T_base_obj, config.camera, rng, bench.cell)
+        obj, T_base_obj, cloud = bench.observe(Trial("mug", pose, i), config.camera, config.seed)
         seen.setdefault(pose, []).append((handle_points(obj.mesh, T_base_obj, cloud), ok))
     for pose, pairs in seen.items():
         n, ok = np.array(pairs).T

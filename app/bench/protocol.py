@@ -104,6 +104,15 @@ def trials(config: BenchConfig) -> list[Trial]:
     return [Trial(t, p, i) for i in range(config.trials) for t in config.tasks for p in config.poses]
 
 
+def parse_indices(specs: list[str]) -> list[int]:
+    """Trial indices from command-line specs: '3' -> [3]; '0-25' -> 0..24."""
+    out = []
+    for spec in specs:
+        a, _, b = spec.partition("-")
+        out.extend(range(int(a), int(b)) if b else [int(a)])
+    return out
+
+
 def camera_eyes(camera: str, center: np.ndarray, cell: CellConfig) -> list[np.ndarray]:
     """Eye positions (base frame) of the camera setting looking at `center`."""
     if camera == "single":

@@ -37,14 +37,19 @@ class TeleportedBench:
     def close(self) -> None:
         self.world.disconnect()
 
+    def observe(self, trial: Trial, camera: str, seed: int):
+        """The trial's object (removed again from the world), its pose T_base_obj and the cloud
+        (1024, 3) the camera setting sees - drawn from the trial's seed, the same for every method."""
+        rng = np.random.default_rng(trial.seed(seed))
+        obj = spawn_test_object(self.world, task(trial.task), trial.pose, rng)
+        T_base_obj = self.world.pose(obj.body)
+        self.world.remove(obj.body)
+        return obj, T_base_obj, trial_cloud(obj.mesh, T_base_obj, camera, rng, self.cell)
+
     def run(self, trial: Trial, config: BenchConfig, demo_root) -> list[dict]:
         """Rows (one per method) for a trial."""
         t = task(trial.task)
-        rng = np.random.default_rng(trial.seed(config.seed))
-        obj = spawn_test_object(self.world, t, trial.pose, rng)
-        T_base_obj = self.world.pose(obj.body)
-        self.world.remove(obj.body)
-        cloud = trial_cloud(obj.mesh, T_base_obj, config.camera, rng, self.cell)
+        obj, T_base_obj, cloud = self.observe(trial, config.camera, config.seed)
         T_base_fixture = self.cell.fixture_pose(t.fixture)
         base = {"trial": trial.key, "task": t.name, "pose": trial.pose, "index": trial.index, "instance": obj.seed,
                 "scale": round(obj.scale, 4)}
