@@ -29,19 +29,14 @@ def turn_degrees(T: np.ndarray, cloud: np.ndarray, normals: np.ndarray | None = 
 
 
 def trial_turns(bench: TeleportedBench, t, pose: str, index: int, seed: int) -> dict[str, float]:
-    """The teacher grasp's turn on each source's cloud for one bench trial."""
-    turns = {}
-    for source in SOURCES:
-        camera = "single" if source == "mesh" else source  # the mesh source needs the object alone
-        obj, T_base_obj, cloud = bench.observe(Trial(t.name, pose, index), camera, seed)
-        T = T_base_obj @ teacher_grasp(obj.mesh)
-        if source == "mesh":
-            posed = obj.mesh.copy().apply_transform(T_base_obj)
-            points, faces = trimesh.sample.sample_surface(posed, 4096, seed=index)
-            turns[source] = turn_degrees(T, points, posed.face_normals[faces])
-        else:
-            turns[source] = turn_degrees(T, cloud)
-    return turns
+    """The teacher grasp's turn on each source's normals for one bench trial."""
+    seen = {camera: bench.observe(Trial(t.name, pose, index), camera, seed) for camera in ("single", "fused")}
+    obj, T_base_obj, _ = seen["single"]  # the same object and pose in both: drawn before the cloud
+    T = T_base_obj @ teacher_grasp(obj.mesh)
+    posed = obj.mesh.copy().apply_transform(T_base_obj)
+    points, faces = trimesh.sample.sample_surface(posed, 4096, seed=index)
+    return {"mesh": turn_degrees(T, points, posed.face_normals[faces]),
+            **{camera: turn_degrees(T, cloud) for camera, (_, _, cloud) in seen.items()}}
 
 
 def main() -> None:

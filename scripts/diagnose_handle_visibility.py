@@ -14,7 +14,7 @@ import numpy as np
 
 from app.bench.protocol import BenchConfig, Trial
 from app.bench.trial import TeleportedBench
-from app.se3 import invert
+from app.se3 import invert, transform_points
 
 BINS = ((0, 1), (1, 30), (30, 10**6))  # cloud points on the handle
 WALL_MARGIN = 0.004  # metres beyond the body's outer radius where the handle starts
@@ -24,7 +24,7 @@ def handle_points(mesh, T_base_obj: np.ndarray, cloud: np.ndarray) -> int:
     """Cloud points (base frame) on the handle: on its +x side, further from the axis than the body."""
     v = np.asarray(mesh.vertices)  # (V, 3), object frame; the handle is on +x (app.objects.handle)
     body = np.percentile(np.hypot(v[:, 0], v[:, 1])[v[:, 0] < 0], 99) + WALL_MARGIN
-    c = (invert(T_base_obj) @ np.c_[cloud, np.ones(len(cloud))].T).T[:, :3]  # (N, 3), object frame
+    c = transform_points(invert(T_base_obj), cloud)  # (N, 3), object frame
     return int(((np.hypot(c[:, 0], c[:, 1]) > body) & (c[:, 0] > 0)).sum())
 
 
@@ -33,6 +33,8 @@ def main() -> None:
     parser.add_argument("run", type=Path)
     parser.add_argument("--method", default="ibs-nif")
     args = parser.parse_args()
+    if not (args.run / "run.json").is_file() or not (args.run / "results.jsonl").is_file():
+        raise SystemExit(f"{args.run} is not a nift bench directory (no run.json and results.jsonl)")
     settings = json.loads((args.run / "run.json").read_text())
     config = BenchConfig(camera=settings["camera"], seed=settings["seed"])
     rows = [json.loads(line) for line in (args.run / "results.jsonl").read_text().splitlines()]

@@ -12,18 +12,14 @@ fi
 data=$1 test=$2 out=$3 minutes=$4
 shift 4
 mkdir -p "$out"
-read -r -a nift <<< "${NIFT:-nift}"
-pids=()
+source "$(dirname "$0")/side_by_side.sh"
 for name in nif ndf; do
   target=$([ "$name" = nif ] && echo scf || echo occ)
-  "${nift[@]}" train --target "$target" --data "$data" --eval-data "$test" --out "$out/$name-run" \
-    --weights "$out/$name.pt" --init "$name" --minutes "$minutes" --json "$@" > "$out/$name.log" 2>&1 &
-  pids+=($!)
+  launch "$out/$name.log" train --target "$target" --data "$data" --eval-data "$test" --out "$out/$name-run" \
+    --weights "$out/$name.pt" --init "$name" --minutes "$minutes" --json "$@"
 done
 status=0
-for pid in "${pids[@]}"; do
-  wait "$pid" || status=1
-done
+wait_all || status=1
 for name in nif ndf; do
   echo "== $name"; tail -n 30 "$out/$name.log"
 done

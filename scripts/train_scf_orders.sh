@@ -14,18 +14,13 @@ fi
 data=$1 test=$2 out=$3 minutes=$4 init=$5 orders=$6
 shift 6
 mkdir -p "$out"
-read -r -a nift <<< "${NIFT:-nift}"
-pids=()
+source "$(dirname "$0")/side_by_side.sh"
 for n in $orders; do
-  "${nift[@]}" train --target scf --scf-order "$n" --data "$data" --eval-data "$test" \
-    --out "$out/nif-$n-run" --weights "$out/nif-$n.pt" --init "$init" --minutes "$minutes" \
-    --json "$@" > "$out/nif-$n.log" 2>&1 &
-  pids+=($!)
+  launch "$out/nif-$n.log" train --target scf --scf-order "$n" --data "$data" --eval-data "$test" \
+    --out "$out/nif-$n-run" --weights "$out/nif-$n.pt" --init "$init" --minutes "$minutes" --json "$@"
 done
 status=0
-for pid in "${pids[@]}"; do
-  wait "$pid" || status=1
-done
+wait_all || status=1
 for n in $orders; do
   echo "== order $n"; grep -E '"(steps|scf_r2)":' "$out/nif-$n.log" || tail -n 3 "$out/nif-$n.log"
 done

@@ -20,7 +20,7 @@ from app.motion.scene import PlanningScene
 from app.oracle import teacher_prediction
 from app.predict import predict
 from app.sim_jobs import JobSpec, run_sim_job, spawn_test_object
-from app.spawn import spawn
+from app.spawn import SpawnedObject, spawn
 from app.tasks import task
 from hardware.sim.world import SimWorld, SimWorldConfig
 
@@ -37,7 +37,7 @@ class TeleportedBench:
     def close(self) -> None:
         self.world.disconnect()
 
-    def observe(self, trial: Trial, camera: str, seed: int):
+    def observe(self, trial: Trial, camera: str, seed: int) -> tuple[SpawnedObject, np.ndarray, np.ndarray]:
         """The trial's object (removed again from the world), its pose T_base_obj and the cloud
         (1024, 3) the camera setting sees - drawn from the trial's seed, the same for every method."""
         rng = np.random.default_rng(trial.seed(seed))
