@@ -6,8 +6,8 @@ import signal
 import sys
 
 from app import __version__
-from app.commands import (bench, bench_cell, bench_jobs, bench_field, bench_geometry, bench_imitation, calibrate, capture, imitate,
-                          make_data, objects, run, sim, teach, train)
+from app.commands import (bench, bench_cell, bench_field, bench_geometry, bench_imitation, bench_jobs, calibrate,
+                          capture, imitate, make_data, objects, run, sim, teach, train)
 
 COMMANDS = [run, objects, sim, calibrate, capture, make_data, train, teach, imitate, bench_geometry, bench_cell,
             bench_field, bench_imitation, bench_jobs, bench]

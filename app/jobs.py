@@ -16,16 +16,16 @@ from typing import Callable
 
 import numpy as np
 
-from app.executor import OBJECT, ExecutionError, ExecutorConfig, Planner, execute
+from app.motion.executor import OBJECT, ExecutionError, ExecutorConfig, Planner, execute
 from app.motion.ik import NoIKSolution, reach_check
 from app.motion.scene import PlanningScene
 from app.nift.imitate import ImitationConfig
 from app.perception import PerceptionConfig, object_cloud
-from app.predict import Prediction, predict
-from app.se3 import pose_to_ur, ur_to_pose
-from app.tasks import Task
+from app.predict.predict import Prediction, predict
+from app.tasks.task import Task
 from hardware.interfaces import Arm, DepthCamera, Gripper
 from hardware.kinematics import UR5Kinematics
+from hardware.se3 import pose_to_ur, ur_to_pose
 
 Predictor = Callable[[np.ndarray], Prediction]  # object cloud (N, 3), base frame -> grasp and place
 STAGES = ("capture", "perceive", "imitate", "plan", "approach", "grasp", "lift", "carry", "place", "release",
@@ -41,11 +41,11 @@ class JobConfig:
     release_clearance: float = 0.02  # m the fingers open beyond the held width to let go: opening fully
     # inside a bowl swept the far finger into its wall and dragged it off the shelf on the retreat
     demos: Path | None = None  # task directory (default demos/<task>)
-    center_grasp: bool = True  # centre the grasp between the fingers and a hang on the peg (app.grasp_centering, app.peg_centering)
-    align_grasp: bool = False  # turn the grasp square to the wall between the fingers (app.grasp_alignment): off, as
+    center_grasp: bool = True  # centre the grasp between the fingers and a hang on the peg (app.predict.grasp_centering, app.predict.peg_centering)
+    align_grasp: bool = False  # turn the grasp square to the wall between the fingers (app.predict.grasp_alignment): off, as
     # one Kinect's normals at a rim are too far off (README, "Grasp alignment")
     feasible: bool = True  # prefer grasps that close on something, places the grasp can carry to, and poses
-    # the cell can reach (app.feasibility, app.motion.ik.reach_check)
+    # the cell can reach (app.predict.feasibility, app.motion.ik.reach_check)
     perception: PerceptionConfig = PerceptionConfig()
     imitation: ImitationConfig = ImitationConfig()
     executor: ExecutorConfig = ExecutorConfig()

@@ -1,1 +1,1 @@
-"""Camera intrinsics/extrinsics: estimation and storage; see the cell issue."""
+"""Eye-to-hand calibration of the camera: the ChArUco board, the solve, and the calibration file."""

@@ -13,13 +13,12 @@ from dataclasses import dataclass, field
 
 import cv2
 import numpy as np
-
 from scipy.optimize import least_squares
 
-from app.se3 import (invert, make_pose, matrix_to_rotvec, random_rotations, rotation_angle, rotvec_to_matrix,
-                    ur_to_pose)
 from calibration.board import BoardSpec, Detection, detect_board
 from hardware.interfaces import Arm, DepthCamera
+from hardware.se3 import (invert, make_pose, matrix_to_rotvec, random_rotations, rotation_angle, rotvec_to_matrix,
+                          ur_to_pose)
 
 
 @dataclass

@@ -1,4 +1,5 @@
-"""Where the UR5 description lives: the installed example-robot-data package (never copied here).
+"""The UR5's description: its home pose, and its URDF from the installed example-robot-data package
+(never copied here), assembled with our gripper.
 
 example-robot-data 6.x ships no Python module; its files are under
 `<site-packages>/cmeel.prefix/share/example-robot-data/robots/`. URDFs there use `package://`
@@ -12,8 +13,13 @@ import os
 import sys
 from pathlib import Path
 
+import numpy as np
+
+from hardware.gripper_geometry import GripperGeometry, gripper_urdf_fragment
+
 ROBOTS_SUBDIR = Path("cmeel.prefix") / "share" / "example-robot-data" / "robots"
 UR5_URDF = Path("ur_description") / "urdf" / "ur5_robot.urdf"
+HOME_Q = np.array([np.pi, -2.2, 1.9, -1.27, -1.57, 0.0])  # TCP pointing down at (0.22, 0.11, 0.37), clear of the camera crop
 
 
 def robots_dir() -> Path:
@@ -54,3 +60,10 @@ def write_cached(name: str, text: str) -> Path:
         tmp.write_text(text)
         os.replace(tmp, path)
     return path
+
+
+def cell_robot_urdf(geometry: GripperGeometry = GripperGeometry()) -> str:
+    """UR5 URDF text with absolute mesh paths and the gripper attached at tool0."""
+    text = resolve_packages(ur5_urdf().read_text())
+    cut = text.rindex("</robot>")
+    return text[:cut] + gripper_urdf_fragment(geometry) + "\n" + text[cut:]

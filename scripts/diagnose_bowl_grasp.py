@@ -13,7 +13,6 @@ import tempfile
 
 import numpy as np
 
-from app.anchors import anchor_mesh
 from app.bench import demos as bench_demos
 from app.bench import runner
 from app.bench.imitation import grasp_error, target
@@ -22,10 +21,11 @@ from app.bench.report import summarise
 from app.nift.imitate import ImitationConfig, imitate
 from app.nift.template import build_template
 from app.objects import split
-from app.predict import predict
-from app.recorder import DEMOS_DIR, task_demos
-from app.se3 import invert
-from app.tasks import task, teacher_grasp
+from app.predict.predict import predict
+from app.tasks.anchors import anchor_mesh
+from app.tasks.library import DEMOS_DIR, task_demos
+from app.tasks.task import task, teacher_grasp
+from hardware.se3 import invert
 
 
 def offsets() -> None:

@@ -13,9 +13,9 @@ import trimesh
 
 from app.bench.protocol import BenchConfig, Trial, parse_indices
 from app.bench.trial import TeleportedBench
-from app.grasp_alignment import align_grasp
-from app.grasp_centering import swept_mask
-from app.tasks import task, teacher_grasp
+from app.predict.grasp_alignment import align_grasp
+from app.predict.grasp_centering import swept_mask
+from app.tasks.task import task, teacher_grasp
 
 SOURCES = ("mesh", "fused", "single")
 

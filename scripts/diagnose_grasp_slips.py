@@ -17,15 +17,14 @@ import numpy as np
 from app.bench.demos import bench_demos
 from app.bench.protocol import BenchConfig, Trial, parse_indices
 from app.bench.trial import TeleportedBench
-from app.feasibility import grips_something
-from app.grasp_centering import center_grasp, swept_points
-from app.judges import judge_grasp
 from app.nift.field import load_field
 from app.nift.imitate import imitate
 from app.nift.template import FEATURES, field_override
-from app.recorder import task_templates
-from app.tasks import task
-
+from app.predict.feasibility import grips_something
+from app.predict.grasp_centering import center_grasp, swept_points
+from app.sim.judges import judge_grasp
+from app.tasks.library import task_templates
+from app.tasks.task import task
 
 parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
 parser.add_argument("task")

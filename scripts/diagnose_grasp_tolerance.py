@@ -6,11 +6,11 @@ The teacher's TCP frame: y across the wall towards the bowl's axis, z the approa
 """
 import numpy as np
 
-from app.judges import judge_grasp
 from app.objects import split
-from app.se3 import make_pose, rotvec_to_matrix
-from app.spawn import spawn
-from app.tasks import teacher_grasp
+from app.sim.judges import judge_grasp
+from app.sim.spawn import spawn
+from app.tasks.task import teacher_grasp
+from hardware.se3 import make_pose, rotvec_to_matrix
 from hardware.sim.world import SimWorld, SimWorldConfig
 
 OFFSETS = {"as taught": make_pose(),

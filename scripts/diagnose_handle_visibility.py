@@ -14,7 +14,7 @@ import numpy as np
 
 from app.bench.protocol import BenchConfig, Trial
 from app.bench.trial import TeleportedBench
-from app.se3 import invert, transform_points
+from hardware.se3 import invert, transform_points
 
 BINS = ((0, 1), (1, 30), (30, 10**6))  # cloud points on the handle
 WALL_MARGIN = 0.004  # metres beyond the body's outer radius where the handle starts

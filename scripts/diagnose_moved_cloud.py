@@ -12,10 +12,10 @@ import numpy as np
 sys.path.insert(0, "tests")  # the test's scene, so the figures are the test's
 from test_imitation import demo_scene, errors  # noqa: E402
 
-from app.anchors import anchor_mesh  # noqa: E402
 from app.nift.imitate import ImitationConfig, imitate  # noqa: E402
 from app.nift.template import build_template  # noqa: E402
-from app.se3 import make_pose, random_rotations  # noqa: E402
+from app.tasks.anchors import anchor_mesh
+from hardware.se3 import make_pose, random_rotations
 
 cloud, T_grasp, _ = demo_scene()
 template = build_template("gripper", anchor_mesh("gripper"), [{"cloud": cloud, "T_frame_anchor": T_grasp}])

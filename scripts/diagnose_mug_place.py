@@ -8,15 +8,15 @@ upright at a random yaw and place, seen by the cell's Kinect (`nift bench-imitat
 import sys
 
 import numpy as np
+from rack_judge import RackJudge
 
 from app.bench.imitation import target
-from app.cell import CellConfig
 from app.nift.imitate import ImitationConfig, imitate
 from app.objects import fixture, semantics, split
-from app.recorder import task_templates
-from app.se3 import invert
-from app.tasks import task
-from rack_judge import RackJudge
+from app.sim.cell import CellConfig
+from app.tasks.library import task_templates
+from app.tasks.task import task
+from hardware.se3 import invert
 
 scale_m = float(sys.argv[1]) if len(sys.argv) > 1 else 0.01
 n = int(sys.argv[2]) if len(sys.argv) > 2 else 20

@@ -8,16 +8,16 @@ Targets: test mugs FIRST..LAST-1, upright at a random yaw and place, seen by the
 import sys
 
 import numpy as np
+from rack_judge import RackJudge
 
 from app.bench.imitation import target
-from app.cell import CellConfig
 from app.nift.imitate import ImitationConfig, imitate
 from app.objects import fixture, semantics, split
-from app.peg_centering import center_on_peg, peg_frame
-from app.recorder import task_templates
-from app.se3 import invert, transform_points
-from app.tasks import task
-from rack_judge import RackJudge
+from app.predict.peg_centering import center_on_peg, peg_frame
+from app.sim.cell import CellConfig
+from app.tasks.library import task_templates
+from app.tasks.task import task
+from hardware.se3 import invert, transform_points
 
 first, last = (int(sys.argv[1]), int(sys.argv[2])) if len(sys.argv) > 2 else (0, 20)
 t, cell, rack = task("mug"), CellConfig(), fixture("rack")

@@ -3,14 +3,21 @@
 Usage (repo root): .venv/bin/python scripts/diagnose_self_imitation.py WEIGHTS THREADS
 The README figures came from an early checkpoint: runs/nif/best.pt after epoch 1, one thread.
 """
-import sys, time, numpy as np, torch
+import sys
+import time
+
+import numpy as np
+import torch
+
 torch.set_num_threads(int(sys.argv[2]))
 sys.path.insert(0, 'tests')
 from test_imitation import demo_scene, errors
-from app.anchors import anchor_mesh
-from app.nift.template import build_template
-from app.nift.imitate import imitate, ImitationConfig
+
 from app.nift.field import load_field
+from app.nift.imitate import ImitationConfig, imitate
+from app.nift.template import build_template
+from app.tasks.anchors import anchor_mesh
+
 w = sys.argv[1]
 cloud, T_tcp, T_rack = demo_scene()
 f = load_field(w)

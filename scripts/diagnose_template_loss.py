@@ -4,15 +4,19 @@ Usage (repo root): .venv/bin/python scripts/diagnose_template_loss.py [TASK ...]
 If the found pose scores lower than the teacher's, the optimiser is not what fails: the objective is.
 """
 import sys
-import numpy as np, torch
+
+import numpy as np
+import torch
+
 from app.bench.imitation import target
-from app.recorder import task_templates
-from app.tasks import task, teacher_grasp, teacher_place
-from app.nift.imitate import imitate, ImitationConfig
 from app.nift.field import load_field
-from app.cell import CellConfig
-from app.se3 import invert
+from app.nift.imitate import ImitationConfig, imitate
 from app.objects import split
+from app.sim.cell import CellConfig
+from app.tasks.library import task_templates
+from app.tasks.task import task, teacher_grasp, teacher_place
+from hardware.se3 import invert
+
 f = load_field("nif"); cell = CellConfig()
 def loss_at(tpl, cloud, T):
     with torch.no_grad():

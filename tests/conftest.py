@@ -19,11 +19,11 @@ def teacher_grasp_verdicts():
     """judge(category, T_tcp_offset, refinements) -> the grasp judge's verdict for each refinement
     ((T_world_tcp, cloud) -> T_world_tcp) of the scripted teacher's grasp on the first upright test
     object, moved by T_tcp_offset (TCP frame); the cloud is 20,000 points of the object's surface."""
-    from app.judges import judge_grasp
     from app.objects import split
-    from app.se3 import make_pose, transform_points
-    from app.spawn import spawn
-    from app.tasks import teacher_grasp
+    from app.sim.judges import judge_grasp
+    from app.sim.spawn import spawn
+    from app.tasks.task import teacher_grasp
+    from hardware.se3 import make_pose, transform_points
     from hardware.sim.world import SimWorld, SimWorldConfig
 
     world = SimWorld(SimWorldConfig())

@@ -9,9 +9,9 @@ from app.bench import trial as trial_module
 from app.bench.protocol import BenchConfig
 from app.bench.report import summarise
 from app.bench.runner import read_rows, run
-from app.methods import ORACLE
-from app.predict import Prediction
-from app.se3 import invert, make_pose, rotvec_to_matrix
+from app.predict.methods import ORACLE
+from app.predict.predict import Prediction
+from hardware.se3 import invert, make_pose, rotvec_to_matrix
 
 
 def _summary(out, config):
@@ -108,7 +108,7 @@ def test_fused_cameras_see_more_of_the_object_than_the_cells_one():
 
     from app.bench.protocol import trial_cloud
     from app.objects import generate
-    from app.se3 import make_pose
+    from hardware.se3 import make_pose
 
     mug = generate("mug", 100_000)
     T = make_pose(t=[0.5, 0.0, 0.0])
@@ -126,13 +126,12 @@ def test_fused_runs_imitate_demos_seen_by_the_fused_cameras(tmp_path):
     from scipy.spatial import cKDTree
 
     from app.bench.demos import bench_demos
-    from app.demo import load_demo
-    from app.objects import generate
-    from app.recorder import DEMOS_DIR
-    from app.se3 import transform_points
-
     from app.bench.runner import settings
     from app.nift.field import FUSED_FIELDS
+    from app.objects import generate
+    from app.tasks.demo import load_demo
+    from app.tasks.library import DEMOS_DIR
+    from hardware.se3 import transform_points
 
     with pytest.raises(ValueError, match="one Kinect"):
         BenchConfig(camera="fused", setting="executed").check()

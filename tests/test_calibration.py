@@ -3,10 +3,10 @@ import json
 import numpy as np
 import pytest
 
-from app.se3 import invert, make_pose, random_poses, rotation_angle
 from calibration.board import Detection
 from calibration.eye_to_hand import Observation, solve
 from calibration.store import FORMAT, load_calibration, save_calibration
+from hardware.se3 import invert, make_pose, random_poses, rotation_angle
 from hardware.sim.kinect import KINECT_V2_DEPTH
 
 K = KINECT_V2_DEPTH.matrix
@@ -60,8 +60,8 @@ def test_solve_with_pixel_noise_stays_within_a_millimetre(rng):
 
 
 def test_sim_cell_calibration_recovers_the_camera():
-    from app.calibrate_cell import calibrate_sim_cell
-    from app.cell import SimCell
+    from app.sim.calibration import calibrate_sim_cell
+    from app.sim.cell import SimCell
 
     with SimCell() as cell:
         c = calibrate_sim_cell(cell, views=20, seed=0)

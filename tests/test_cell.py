@@ -4,12 +4,12 @@ import dataclasses
 import numpy as np
 import pytest
 
-from app.cell import SimCell
-from app.judges import judge_grasp, judge_place
 from app.objects import rack, shelf
 from app.perception import object_cloud
-from app.spawn import spawn
-from app.teacher import grasp_pose, hang_pose, shelf_pose
+from app.sim.cell import SimCell
+from app.sim.judges import judge_grasp, judge_place
+from app.sim.spawn import spawn
+from app.tasks.teacher import grasp_pose, hang_pose, shelf_pose
 
 BOX = (0.10, 0.08, 0.06)
 BOX_CENTRE = (0.50, 0.02, 0.03)

@@ -2,8 +2,8 @@ from pathlib import Path
 
 import pytest
 
-from app.cell import CellConfig
 from app.config import load_toml
+from app.sim.cell import CellConfig
 
 SHIPPED = Path(__file__).resolve().parents[1] / "configs" / "cell.toml"
 

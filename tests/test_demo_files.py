@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 
 from app.cloud_io import load_cloud, save_cloud
-from app.demo import Demo, load_demo, save_demo
-from app.se3 import invert, random_poses
+from app.tasks.demo import Demo, load_demo, save_demo
+from hardware.se3 import invert, random_poses
 
 
 def a_demo():

@@ -1,10 +1,10 @@
 """Feasibility of imitated poses: the predicates on known geometry, and imitation honouring a predicate."""
 import numpy as np
 
-from app.feasibility import (GRIP_POINTS, all_of, carries_like_demos, grip_points, grips_something, point_spacing, reaches,
-                             reaches_at_place)
-from app.grasp_centering import swept_points
-from app.se3 import invert, make_pose, random_rotations, rotvec_to_matrix
+from app.predict.feasibility import (GRIP_POINTS, all_of, carries_like_demos, grip_points, grips_something,
+                                     point_spacing, reaches, reaches_at_place)
+from app.predict.grasp_centering import swept_points
+from hardware.se3 import invert, make_pose, random_rotations, rotvec_to_matrix
 
 
 def test_a_grasp_grips_something_only_with_points_between_the_fingers():

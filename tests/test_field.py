@@ -1,15 +1,15 @@
 """The neural field: equivariance, gradients, save/load, shipped weights' accuracy on unseen objects."""
+from dataclasses import asdict
+
 import numpy as np
 import pytest
 import torch
 
-from dataclasses import asdict
-
 from app.nift.field import WEIGHTS_DIR, FieldConfig, NeuralField, field_path, load_field, read_card, save_field
-from app.se3 import random_rotations
 from app.training.data import DataConfig, make_dataset
 from app.training.dataset import FieldData
 from app.training.evaluate import evaluate, loss_of
+from hardware.se3 import random_rotations
 
 SMALL = FieldConfig(latent=8, encoder_width=8, encoder_blocks=2, decoder_width=16, decoder_blocks=2)
 

@@ -2,9 +2,9 @@
 import numpy as np
 import pytest
 
-from app.grasp_alignment import MAX_ANGLE, align_grasp, surface_normals, wall_direction
-from app.grasp_centering import MIN_POINTS, center_grasp
-from app.se3 import make_pose, random_rotations, rotvec_to_matrix, transform_points
+from app.predict.grasp_alignment import MAX_ANGLE, align_grasp, surface_normals, wall_direction
+from app.predict.grasp_centering import MIN_POINTS, center_grasp
+from hardware.se3 import make_pose, random_rotations, rotvec_to_matrix, transform_points
 
 
 def _pose(seed: int) -> np.ndarray:
@@ -73,7 +73,7 @@ def test_given_normals_are_used_and_match_open3d():
 def test_a_rim_grasp_tilted_across_the_wall_slips_and_aligned_holds(category, tilt, teacher_grasp_verdicts):
     """The teacher's rim grasp turned about the finger-width axis touches the wall with pad edges and
     slips on the lift; turned back onto the wall's normal (then centred, as predictions are) it holds."""
-    from app.predict import refine_grasp
+    from app.predict.predict import refine_grasp
 
     turned = make_pose(rotvec_to_matrix([np.radians(tilt), 0.0, 0.0]))
     centred, aligned = teacher_grasp_verdicts(category, turned, [
@@ -84,7 +84,7 @@ def test_a_rim_grasp_tilted_across_the_wall_slips_and_aligned_holds(category, ti
 
 
 def test_predictions_are_turned_then_centred_and_an_unturned_grasp_is_centred_once():
-    from app.predict import refine_grasp
+    from app.predict.predict import refine_grasp
 
     T = _pose(6)
     beyond = _wall(0.0, n=100, seed=1) * [0.5, 1.0, 0.5] + [0.0, 0.045, 0.0]  # just past the open fingers

@@ -2,9 +2,9 @@
 import numpy as np
 import pytest
 
-from app.grasp_centering import MIN_POINTS, center_grasp, swept_points
-from app.se3 import make_pose, random_rotations, transform_points
-from hardware.sim.gripper_model import GripperGeometry
+from app.predict.grasp_centering import MIN_POINTS, center_grasp, swept_points
+from hardware.gripper_geometry import GripperGeometry
+from hardware.se3 import make_pose, random_rotations, transform_points
 
 
 def _pose(seed: int) -> np.ndarray:

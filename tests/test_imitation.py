@@ -2,16 +2,16 @@
 import numpy as np
 import pytest
 
-from app.anchors import anchor_mesh
 from app.nift.imitate import ImitationConfig, imitate
 from app.nift.raycast import scene_of
 from app.nift.template import build_template
 from app.objects import generate, rack
-from app.predict import predict
-from app.se3 import invert, make_pose, random_rotations, rotvec_to_matrix
-from app.tasks import task
-from app.teacher import grasp_pose, hang_pose
+from app.predict.predict import predict
+from app.tasks.anchors import anchor_mesh
+from app.tasks.task import task
+from app.tasks.teacher import grasp_pose, hang_pose
 from app.training.views import observe
+from hardware.se3 import invert, make_pose, random_rotations, rotvec_to_matrix
 
 
 def demo_scene(seed=3):
@@ -75,7 +75,7 @@ def test_every_initialisation_is_scored_on_all_points_after_a_subset_exploration
     from app.nift.field import load_field
     from app.nift.imitate import frozen
     from app.nift.template import point_features
-    from app.se3 import transform_points
+    from hardware.se3 import transform_points
 
     cloud, stages = demo
     template = stages[stage][0]
@@ -100,7 +100,7 @@ def test_template_points_know_their_distance_to_the_anchor_which_on_the_ibs_is_t
     distance to the mug's cloud to within the bisector's resolution."""
     from scipy.spatial import cKDTree
 
-    from app.se3 import transform_points
+    from hardware.se3 import transform_points
 
     cloud, stages = demo
     template, T_base_rack = stages["place"]

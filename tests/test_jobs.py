@@ -5,11 +5,11 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from app.cell import CellConfig, SimCell
 from app.jobs import JobConfig
 from app.motion.scene import PlanningScene
-from app.sim_jobs import JobSpec, run_sim_job
-from app.tasks import task
+from app.sim.cell import CellConfig, SimCell
+from app.sim.jobs import JobSpec, run_sim_job
+from app.tasks.task import task
 
 
 def _run(config: CellConfig, spec: JobSpec, method: str, record=None):

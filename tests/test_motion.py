@@ -2,17 +2,17 @@
 import numpy as np
 import pytest
 
-from app.cell import CellConfig
 from app.motion.cartesian import MAX_JOINT_JUMP, line_path
 from app.motion.ik import IKConfig, NoIKSolution, reach_check, solve
 from app.motion.scene import PlanningScene
 from app.motion.trajectory import path_timing, through_waypoints
-from app.se3 import line_length, make_pose, rotation_angle, rotvec_to_matrix
+from app.sim.cell import CellConfig
+from hardware.gripper_geometry import GripperGeometry
 from hardware.interfaces import JointLimits
 from hardware.kinematics import UR5Kinematics
+from hardware.robot_description import HOME_Q
+from hardware.se3 import line_length, make_pose, rotation_angle, rotvec_to_matrix
 from hardware.sim.arm import JOINT_ACCELERATION_LIMIT, JOINT_JERK_LIMIT
-from hardware.sim.gripper_model import GripperGeometry
-from hardware.sim.robot import HOME_Q
 
 
 @pytest.fixture(scope="module")

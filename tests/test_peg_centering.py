@@ -3,9 +3,9 @@ import numpy as np
 import pytest
 
 from app.objects import fixture, generate, semantics, split
-from app.peg_centering import LANE, center_on_peg, peg_frame, peg_shift
-from app.se3 import invert, make_pose, random_rotations, transform_points
-from app.teacher import hang_pose
+from app.predict.peg_centering import LANE, center_on_peg, peg_frame, peg_shift
+from app.tasks.teacher import hang_pose
+from hardware.se3 import invert, make_pose, random_rotations, transform_points
 
 RACK = fixture("rack")
 
@@ -74,8 +74,8 @@ def test_a_mug_hung_off_along_its_hole_is_put_back_on_the_peg(index):
 
 def test_the_demos_own_hangs_are_left_within_5_mm():
     """At the place each mug demo really had, its own (single-view) cloud moves the peg by < 5 mm."""
-    from app.recorder import DEMOS_DIR, task_demos
-    from app.tasks import task
+    from app.tasks.library import DEMOS_DIR, task_demos
+    from app.tasks.task import task
 
     shifts = [peg_shift(transform_points(invert(d.place_anchor()), d.cloud), RACK)
               for d in task_demos(DEMOS_DIR / task("mug").demos)]

@@ -2,10 +2,9 @@ import numpy as np
 import pytest
 import trimesh
 
-from app.nift.scf import (compute_scf, compute_scf_cloud, real_sph_harm, spherical_basis,
-                          spherical_function)
+from app.nift.scf import compute_scf, compute_scf_cloud, real_sph_harm, spherical_basis, spherical_function
 from app.objects import generate
-from app.se3 import make_pose, random_rotations
+from hardware.se3 import make_pose, random_rotations
 
 C0_CONSTANT = 2.0 * np.sqrt(np.pi)  # c_0 of F = 1 with orthonormal Y_0^0 = 1 / (2 sqrt(pi))
 

@@ -1,11 +1,12 @@
 import numpy as np
 import pytest
 
-from app.se3 import pose_to_ur
 from hardware.interfaces import DeviceNotConnectedError, ProtectiveStopError
+from hardware.robot_description import HOME_Q
+from hardware.se3 import pose_to_ur
 from hardware.sim.arm import SimArm, SimArmConfig
 from hardware.sim.gripper import SimGripper, SimGripperConfig
-from hardware.sim.robot import HOME_Q, SimRobot
+from hardware.sim.robot import SimRobot
 from hardware.sim.world import SimWorld
 
 
@@ -119,8 +120,8 @@ def test_tcp_pose_matches_ur_convention(rig):
 def test_stepping_is_deterministic():
     import numpy as np
 
-    from app.cell import SimCell
-    from app.spawn import spawn
+    from app.sim.cell import SimCell
+    from app.sim.spawn import spawn
 
     def run_once():
         with SimCell() as cell:

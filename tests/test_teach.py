@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 
 from app.cli import main
-from app.demo import load_demo
 from app.nift.template import load_template
+from app.tasks.demo import load_demo
 
 
 @pytest.mark.slow

@@ -6,9 +6,8 @@ import pytest
 import torch
 
 from app.nift.imitate import rotation_from_6d, rotation_to_6d
-from app.nift.template import (FORMAT, StaleTemplate, Template, density_resample, field_id, load_template,
-                               save_template)
-from app.se3 import random_rotations
+from app.nift.template import FORMAT, StaleTemplate, Template, density_resample, field_id, load_template, save_template
+from hardware.se3 import random_rotations
 
 
 def test_density_resampling_keeps_the_count_and_favours_where_demos_agree():
@@ -80,9 +79,9 @@ def test_templates_of_other_nif_weights_sit_beside_the_shipped_ones(tmp_path):
     from app.bench.runner import settings
     from app.nift.field import FieldConfig, NeuralField, save_field
     from app.nift.imitate import ImitationConfig
-    from app.predict import predict
-    from app.recorder import DEMOS_DIR, task_demos, task_templates, template_path
-    from app.tasks import task
+    from app.predict.predict import predict
+    from app.tasks.library import DEMOS_DIR, task_demos, task_templates, template_path
+    from app.tasks.task import task
 
     small = FieldConfig(scf_order=3, latent=8, encoder_width=8, encoder_blocks=1, decoder_width=16, decoder_blocks=1)
     weights = save_field(NeuralField(small), tmp_path / "order3.pt")

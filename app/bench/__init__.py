@@ -1,1 +1,1 @@
-"""Benchmarks: geometry throughput now; the success-rate tables later."""
+"""Benchmarks: geometry throughput, the field, imitation, the cell, executed jobs, and the paper's tables."""

@@ -6,11 +6,11 @@ import time
 import numpy as np
 
 from app.bench.geometry import best_time
-from app.calibrate_cell import calibrate_sim_cell
-from app.cell import CellConfig, SimCell
 from app.perception import object_cloud
-from app.spawn import spawn
-from hardware.sim.robot import HOME_Q
+from app.sim.calibration import calibrate_sim_cell
+from app.sim.cell import CellConfig, SimCell
+from app.sim.spawn import spawn
+from hardware.robot_description import HOME_Q
 
 
 def run_cell_benchmark(quick: bool = False, seed: int = 0) -> dict:

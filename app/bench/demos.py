@@ -16,11 +16,11 @@ from pathlib import Path
 import numpy as np
 
 from app.bench.protocol import BenchConfig, trial_cloud
-from app.cell import CellConfig
-from app.demo import Demo, load_demo, save_demo
 from app.objects.catalog import generate
-from app.recorder import DEMOS_DIR
-from app.tasks import task
+from app.sim.cell import CellConfig
+from app.tasks.demo import Demo, load_demo, save_demo
+from app.tasks.library import DEMOS_DIR
+from app.tasks.task import task
 
 
 def seen_by(demo: Demo, camera: str, cell: CellConfig, seed: int) -> Demo:

@@ -15,7 +15,7 @@ from app.nift.ibs import compute_ibs
 from app.nift.raycast import cast, make_scene, signed_distance, unsigned_distance, view_cloud
 from app.nift.scf import CHUNK_RAYS, compute_scf, compute_scf_cloud, spherical_basis
 from app.objects import generate, rack
-from app.se3 import make_pose, random_rotations
+from hardware.se3 import make_pose, random_rotations
 
 
 def best_time(fn: Callable[[], object], repeats: int) -> float:

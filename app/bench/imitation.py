@@ -17,16 +17,16 @@ from dataclasses import replace
 import numpy as np
 import torch
 
-from app.cell import WORKSPACE, CellConfig
 from app.nift.imitate import ImitationConfig
 from app.nift.raycast import scene_of
 from app.objects import split
 from app.perception import resample
-from app.predict import predict
-from app.se3 import invert, make_pose, pose_error, rotvec_to_matrix
-from app.spawn import SCALE_RANGE
-from app.tasks import task, teacher_grasp, teacher_place
+from app.predict.predict import predict
+from app.sim.cell import WORKSPACE, CellConfig
+from app.sim.spawn import SCALE_RANGE
+from app.tasks.task import task, teacher_grasp, teacher_place
 from app.training.views import kinect_cloud
+from hardware.se3 import invert, make_pose, pose_error, rotvec_to_matrix
 from hardware.sim.kinect import look_at
 
 HALF_TURN = make_pose(rotvec_to_matrix([0.0, 0.0, np.pi]))

@@ -8,11 +8,11 @@ from typing import Callable
 
 import numpy as np
 
-from app.cell import CellConfig, SimCell
 from app.jobs import JobConfig, JobResult
 from app.motion.scene import PlanningScene
-from app.sim_jobs import JobSpec, run_series
-from app.tasks import task
+from app.sim.cell import CellConfig, SimCell
+from app.sim.jobs import JobSpec, run_series
+from app.tasks.task import task
 
 
 def summarise(name: str, results: list[JobResult]) -> dict:
@@ -38,7 +38,7 @@ def run_jobs_benchmark(jobs: int = 20, method: str = "nift", pose: str = "uprigh
                        calibration: Path | None = None, progress: Callable[[JobResult], None] = lambda r: None) -> dict:
     """Run `jobs` jobs per task (seeds seed .. seed + jobs - 1) and summarise them; the camera pose
     comes from the `calibration` file (calibrating first if it is missing), or is the true one."""
-    from app.commands.capture import ensure_calibration
+    from app.sim.calibration import ensure_calibration
 
     figures: dict = {"method": method, "pose": pose, "jobs_per_task": jobs}
     with SimCell(cell_config) as cell:

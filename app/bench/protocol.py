@@ -1,4 +1,4 @@
-"""The benchmark protocol (DESIGN.md, after NDF): which objects, poses and clouds each trial gets.
+"""The benchmark protocol (docs/benchmark.md, after NDF): which objects, poses and clouds each trial gets.
 
 A trial is (task, pose setting, index). Its seed fixes the unseen test-split instance, the
 uniform random scale, the pose (upright: random yaw and place on the table; arbitrary: Haar
@@ -15,11 +15,11 @@ from dataclasses import dataclass, field
 import numpy as np
 import trimesh
 
-from app.cell import CellConfig
 from app.nift.field import FUSED_FIELDS
 from app.nift.imitation_config import ImitationConfig
 from app.nift.raycast import scene_of
 from app.perception import resample
+from app.sim.cell import CellConfig
 from app.training.views import CAMERAS, kinect_cloud
 from hardware.sim.kinect import look_at
 
@@ -42,9 +42,9 @@ class BenchConfig:
     setting: str = "teleported"
     seed: int = 0
     nif: str | None = None  # other field weights (app.nift.template.field_override): a NIF .pt or a dir of nif.pt + ndf.pt
-    center_grasp: bool = True  # centre every method's grasp between the fingers and hang on the peg (app.grasp_centering, app.peg_centering)
-    align_grasp: bool | None = None  # turn every method's grasp square to the wall between the fingers (app.grasp_alignment); None: `aligns`
-    feasible: bool = True  # rank template methods' candidate poses by feasibility first (app.feasibility)
+    center_grasp: bool = True  # centre every method's grasp between the fingers and hang on the peg (app.predict.grasp_centering, app.predict.peg_centering)
+    align_grasp: bool | None = None  # turn every method's grasp square to the wall between the fingers (app.predict.grasp_alignment); None: `aligns`
+    feasible: bool = True  # rank template methods' candidate poses by feasibility first (app.predict.feasibility)
     place_contact_scale: float = ImitationConfig.place_contact_scale  # contact weighting of place templates; 0: the paper's
     place_demo_match: str = ImitationConfig.place_demo_match  # place poses against the demos' mean features or the nearest demo's
     cell: CellConfig = field(default_factory=CellConfig)

@@ -20,10 +20,10 @@ from typing import Callable
 from app.bench.demos import bench_demos
 from app.bench.protocol import BenchConfig, Trial, trials
 from app.io_utils import write_json
-from app.methods import ORACLE, check_method
 from app.nift.template import weights_id
-from app.recorder import task_templates
-from app.tasks import task
+from app.predict.methods import ORACLE, check_method
+from app.tasks.library import task_templates
+from app.tasks.task import task
 
 FORMAT = "nift-bench/1"
 ADDED = {"place_demo_match": "mean", "align_grasp": False}  # settings added since the format, with the value runs made before them had

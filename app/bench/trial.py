@@ -12,16 +12,16 @@ import time
 import numpy as np
 
 from app.bench.protocol import BenchConfig, Trial, trial_cloud
-from app.cell import CellConfig, SimCell, add_fixtures
 from app.jobs import JobConfig
-from app.judges import judge_grasp, judge_place
-from app.methods import ORACLE
 from app.motion.scene import PlanningScene
-from app.oracle import teacher_prediction
-from app.predict import predict
-from app.sim_jobs import JobSpec, run_sim_job, spawn_test_object
-from app.spawn import SpawnedObject, spawn
-from app.tasks import task
+from app.predict.methods import ORACLE
+from app.predict.predict import predict
+from app.sim.cell import CellConfig, SimCell, add_fixtures
+from app.sim.jobs import JobSpec, run_sim_job, spawn_test_object
+from app.sim.judges import judge_grasp, judge_place
+from app.sim.oracle import teacher_prediction
+from app.sim.spawn import SpawnedObject, spawn
+from app.tasks.task import task
 from hardware.sim.world import SimWorld, SimWorldConfig
 
 

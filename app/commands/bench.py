@@ -1,4 +1,4 @@
-"""`nift bench`: the paper's success-rate tables, reproducible with one command (see DESIGN.md)."""
+"""`nift bench`: the paper's success-rate tables, reproducible with one command (docs/benchmark.md)."""
 from __future__ import annotations
 
 import argparse
@@ -64,9 +64,9 @@ def run(args: argparse.Namespace) -> int:
     from app.bench.protocol import BenchConfig
     from app.bench.report import write_report
     from app.bench.runner import run as run_bench
-    from app.methods import ORACLE, check_method
-    from app.spawn import POSES
-    from app.tasks import task
+    from app.predict.methods import ORACLE, check_method
+    from app.sim.spawn import POSES
+    from app.tasks.task import task
 
     if args.quick:
         args.trials, args.methods, args.poses = QUICK["trials"], QUICK["methods"], QUICK["poses"]

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import argparse
 
-from app.commands.output import print_figures
+from app.console.output import print_figures
 
 NAME = "bench-cell"
 HELP = "measure the sim cell: real-time factor, camera frame and perception time, calibration error"

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import argparse
 
-from app.commands.output import print_figures
+from app.console.output import print_figures
 
 NAME = "bench-field"
 HELP = "measure field data generation, training throughput and feature forward+backward time"

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import argparse
 
-from app.commands.output import print_figures
+from app.console.output import print_figures
 
 NAME = "bench-geometry"
 HELP = "measure Embree ray rate, SCF throughput/accuracy and IBS time on this machine"

@@ -3,15 +3,15 @@ from __future__ import annotations
 
 import argparse
 
-from app.commands.output import print_figures
+from app.console.output import print_figures
 
 NAME = "bench-imitation"
 HELP = "measure imitation time per prediction and grasp/place errors on unseen test objects"
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    from app.commands.imitation_options import add_imitation_arguments
-    from app.methods import METHODS
+    from app.console.options import add_imitation_arguments
+    from app.predict.methods import METHODS
 
     p.add_argument("--method", default="nift", choices=METHODS, help="method to measure (default nift)")
     p.add_argument("--objects", type=int, default=20, help="test objects per task (default 20)")
@@ -24,7 +24,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from app.bench.imitation import run_imitation_benchmark
-    from app.commands.imitation_options import imitation_config
+    from app.console.options import imitation_config
 
     tasks = tuple(t.strip() for t in args.tasks.split(",") if t.strip())
     figures = run_imitation_benchmark(args.quick, args.seed, args.method, args.objects, tasks, imitation_config(args))

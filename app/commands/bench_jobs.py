@@ -4,15 +4,15 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from app.commands.cell_options import add_config_argument
-from app.commands.output import print_figures
+from app.console.options import add_config_argument
+from app.console.output import print_figures
 
 NAME = "bench-jobs"
 HELP = "run a series of executed jobs per task and report success, planning, trajectory and job times"
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    from app.methods import SIM_METHODS
+    from app.predict.methods import SIM_METHODS
 
     p.add_argument("--method", default="nift", choices=SIM_METHODS, help="method (teacher: the oracle)")
     p.add_argument("--jobs", type=int, default=20, help="jobs per task (default 20)")
@@ -30,8 +30,8 @@ def run(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
     from app.bench.jobs import run_jobs_benchmark
-    from app.commands.cell_options import cell_config
-    from app.tasks import task
+    from app.console.options import cell_config
+    from app.tasks.task import task
 
     tasks = tuple(task(t.strip()).name for t in args.tasks.split(",") if t.strip())
     jobs = 2 if args.quick else args.jobs

@@ -4,8 +4,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from app.commands.cell_options import add_config_argument, cell_config
-from app.commands.output import print_figures
+from app.console.options import add_config_argument, cell_config
+from app.console.output import print_figures
 
 NAME = "calibrate"
 HELP = "eye-to-hand calibrate the camera with a ChArUco board on the flange; write the calibration file"
@@ -20,8 +20,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from app.calibrate_cell import calibrate_sim_cell, result_record
-    from app.cell import SimCell
+    from app.sim.calibration import calibrate_sim_cell, result_record
+    from app.sim.cell import SimCell
     from calibration.store import save_calibration
 
     if args.views < 3:

@@ -7,7 +7,7 @@ import json
 import sys
 from pathlib import Path
 
-from app.commands.cell_options import add_config_argument, cell_config
+from app.console.options import add_config_argument, cell_config
 
 NAME = "capture"
 HELP = "capture a single-view object cloud (PLY) and the colour image (PNG) in the sim cell"
@@ -19,7 +19,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--out", type=Path, default=Path("cloud.ply"), help="object cloud, PLY, base frame")
     p.add_argument("--image", type=Path, default=Path("rgb.png"), help="colour image, PNG")
     p.add_argument("--category", default="mug", choices=CATEGORIES)
-    p.add_argument("--pose", default="upright", choices=["upright", "arbitrary"])  # app.spawn.POSES
+    p.add_argument("--pose", default="upright", choices=["upright", "arbitrary"])  # app.sim.spawn.POSES
     p.add_argument("--seed", type=int, default=0, help="picks the test instance, its pose and the noise")
     p.add_argument("--calibration", type=Path, default=Path("calibration.json"),
                    help="camera calibration file; if missing, the cell is calibrated first and it is written")
@@ -27,28 +27,16 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     add_config_argument(p)
 
 
-def ensure_calibration(cell, path: Path):
-    """T_base_cam from the calibration file (never the simulator's truth); calibrate first if it is missing."""
-    from calibration.store import load_calibration, save_calibration
-
-    if not path.exists():
-        from app.calibrate_cell import calibrate_sim_cell, result_record
-
-        print(f"no calibration file {path}: calibrating the cell first", file=sys.stderr)
-        c = calibrate_sim_cell(cell)
-        save_calibration(path, c.result.T_base_cam, result_record(c))
-    return load_calibration(path)[0]
-
-
 def run(args: argparse.Namespace) -> int:
     import matplotlib.image
     import numpy as np
-    from app.cell import SimCell
+
     from app.cloud_io import save_cloud
     from app.io_utils import atomic_path
     from app.objects import split
     from app.perception import object_cloud
-    from app.spawn import SCALE_RANGE, spawn
+    from app.sim.cell import SimCell
+    from app.sim.spawn import SCALE_RANGE, spawn
 
     if args.out.suffix.lower() != ".ply" or args.image.suffix.lower() != ".png":
         raise ValueError("--out must end in .ply and --image in .png")

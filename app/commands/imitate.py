@@ -10,8 +10,8 @@ HELP = "predict the grasp pose and the place motion for an object cloud from a t
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    from app.commands.imitation_options import add_imitation_arguments
-    from app.methods import METHODS
+    from app.console.options import add_imitation_arguments
+    from app.predict.methods import METHODS
 
     p.add_argument("--task", required=True, choices=["mug", "bowl", "bottle"], help="which task's demos to imitate")
     p.add_argument("--cloud", type=Path, required=True, help="object cloud in the base frame (.ply .pcd .xyz .npy)")
@@ -34,10 +34,10 @@ def run(args: argparse.Namespace) -> int:
     import numpy as np
 
     from app.cloud_io import load_cloud
-    from app.commands.imitation_options import imitation_config
-    from app.predict import predict
-    from app.se3 import pose_to_ur
-    from app.tasks import task
+    from app.console.options import imitation_config
+    from app.predict.predict import predict
+    from app.tasks.task import task
+    from hardware.se3 import pose_to_ur
 
     cloud = load_cloud(args.cloud)
     pred = predict(task(args.task), cloud, args.method, directory=args.demos, config=imitation_config(args),

@@ -4,7 +4,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from app.commands.output import print_figures
+from app.console.output import print_figures
 
 NAME = "make-data"
 HELP = "generate sharded, resumable field training data from procedural objects"

@@ -5,14 +5,14 @@ import argparse
 import json
 from pathlib import Path
 
-from app.commands.cell_options import add_config_argument
+from app.console.options import add_config_argument
 
 NAME = "run"
 HELP = "run pick-and-place jobs in the sim cell: capture, imitate, plan, grasp, carry, place, verify"
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    from app.methods import SIM_METHODS
+    from app.predict.methods import SIM_METHODS
 
     p.add_argument("--task", required=True, choices=["mug", "bowl", "bottle"], help="which task to do")
     p.add_argument("--pose", default="upright", choices=["upright", "arbitrary"],
@@ -33,13 +33,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
-    from app.cell import SimCell
-    from app.commands.capture import ensure_calibration
-    from app.commands.cell_options import cell_config
+    from app.console.options import cell_config
     from app.jobs import JobConfig
     from app.motion.scene import PlanningScene
-    from app.sim_jobs import JobSpec, run_series
-    from app.tasks import task
+    from app.sim.calibration import ensure_calibration
+    from app.sim.cell import SimCell
+    from app.sim.jobs import JobSpec, run_series
+    from app.tasks.task import task
 
     if args.jobs < 1:
         raise ValueError(f"--jobs must be at least 1, got {args.jobs}")

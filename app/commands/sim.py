@@ -5,7 +5,7 @@ import argparse
 import json
 import time
 
-from app.commands.cell_options import add_config_argument, cell_config
+from app.console.options import add_config_argument, cell_config
 
 NAME = "sim"
 HELP = "bring the simulated cell up (UR5, gripper, Kinect v2, rack, shelf) and report its state"
@@ -19,7 +19,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from app.cell import SimCell
+    from app.sim.cell import SimCell
 
     with SimCell(cell_config(args, gui=args.gui)) as cell:
         t0 = time.perf_counter()

@@ -6,7 +6,7 @@ import json
 import sys
 from pathlib import Path
 
-from app.commands.cell_options import add_config_argument, cell_config
+from app.console.options import add_config_argument, cell_config
 
 NAME = "teach"
 HELP = "record demos of a task (scripted teacher or your poses), verify them, rebuild the task's NIT"
@@ -30,7 +30,7 @@ def read_poses(path: Path):
     """An operator's poses file -> (instance seed, TaughtPoses)."""
     import numpy as np
 
-    from app.recorder import TaughtPoses
+    from app.sim.teach import TaughtPoses
 
     if not path.is_file():
         raise FileNotFoundError(f"no poses file at {path}")
@@ -45,9 +45,10 @@ def read_poses(path: Path):
 def run(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from app.cell import SimCell
-    from app.recorder import DEMOS_DIR, record_demo, record_task, task_demos, task_templates
-    from app.tasks import task
+    from app.sim.cell import SimCell
+    from app.sim.teach import record_demo, record_task
+    from app.tasks.library import DEMOS_DIR, task_demos, task_templates
+    from app.tasks.task import task
 
     t = task(args.task)
     out = args.out or DEMOS_DIR / t.name
@@ -55,11 +56,11 @@ def run(args: argparse.Namespace) -> int:
     recorded = []
     if not args.rebuild:
         with SimCell(cell_config(args)) as cell:
-            from app.commands.capture import ensure_calibration
+            from app.sim.calibration import ensure_calibration
 
             T_base_cam = ensure_calibration(cell, args.calibration)
             if args.poses:
-                from app.demo import save_demo
+                from app.tasks.demo import save_demo
 
                 instance, poses = read_poses(args.poses)
                 n = len(list(out.glob("demo-*.npz")))

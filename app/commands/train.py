@@ -6,7 +6,7 @@ import shlex
 import sys
 from pathlib import Path
 
-from app.commands.output import print_figures
+from app.console.output import print_figures
 
 NAME = "train"
 HELP = "train a neural field on `nift make-data` output: NIF (SCF) or NDF (occupancy)"

@@ -12,8 +12,8 @@ import numpy as np
 
 from app.motion.ik import NoIKSolution
 from app.motion.scene import PlanningScene
-from app.se3 import interpolate_pose, line_length
 from hardware.kinematics import UR5Kinematics
+from hardware.se3 import interpolate_pose, line_length
 
 STEP = 0.004  # m (or 0.04 rad / 10) between IK points along the line
 MAX_JOINT_JUMP = 0.08  # rad between neighbouring IK points; more, at every subdivision, means a branch switch

@@ -8,7 +8,7 @@ import numpy as np
 
 from app.motion.scene import PlanningScene
 from hardware.kinematics import UR5Kinematics
-from hardware.sim.robot import HOME_Q
+from hardware.robot_description import HOME_Q
 
 
 @dataclass(frozen=True)

@@ -1,5 +1,8 @@
 """The planning scene: a collision model of the cell in its own PyBullet client (DIRECT, no physics).
 
+PyBullet serves here as a collision library only (`hardware.bullet`): the scene never steps
+physics and never imports the simulated cell, so it models a real cell just the same.
+
 It holds the robot with its gripper, the table, the rack and the shelf at their configured poses,
 and obstacles added at run time (the convex hull of the observed object). `collisions(q)` names
 what the arm would hit at joint positions q. It is a model built from the cell's configuration,
@@ -12,7 +15,7 @@ Without it a carried mug was swept through the rack in 2 of 10 executed teacher 
 the protective stops that followed; MoveIt calls this an attached collision object).
 
 `gripper_collisions(T_base_tcp)` asks the same of the gripper alone, open, at a TCP pose, without
-the arm: a cheap first test of candidate grasp and place poses before any IK (`app.feasibility`).
+the arm: a cheap first test of candidate grasp and place poses before any IK (`app.predict.feasibility`).
 """
 from __future__ import annotations
 
@@ -20,13 +23,12 @@ import itertools
 from contextlib import contextmanager
 
 import numpy as np
-import pybullet as p
 
-from app.cell import CellConfig, add_fixtures
-from hardware.robot_description import write_cached
-from hardware.sim.gripper_model import FINGER_JOINTS, standalone_gripper_urdf
-from hardware.sim.robot import HOME_Q, SimRobot, joint_and_link_indices
-from hardware.sim.world import SimWorld, SimWorldConfig
+from app.layout import CellLayout, add_fixtures
+from hardware.bullet import add_table, joint_and_link_indices, load_cell_robot, p, set_pose
+from hardware.gripper_geometry import FINGER_JOINTS, GripperGeometry, standalone_gripper_urdf
+from hardware.kinematics import JOINT_NAMES, UR5Kinematics
+from hardware.robot_description import HOME_Q, write_cached
 
 HELD = "held"  # the name collisions give the carried object
 GRIPPER_LINKS = ("gripper_palm", "finger_left", "finger_right")
@@ -37,32 +39,36 @@ ON_TABLE = ("base_link", "shoulder_link")  # bolted to the table: never checked 
 class PlanningScene:
     """Collision queries for joint configurations of the cell's UR5."""
 
-    def __init__(self, config: CellConfig = CellConfig(), margin: float = 0.005) -> None:
+    def __init__(self, layout: CellLayout = CellLayout(), margin: float = 0.005,
+                 geometry: GripperGeometry = GripperGeometry()) -> None:
         self.margin = margin  # metres of clearance that count as a collision
-        self.world = SimWorld(SimWorldConfig(gui=False))
-        self.world.connect()
-        self.robot = SimRobot(self.world)
-        self.robot.load()
-        self.obstacles: dict[str, int] = {"table": self.world.table, **add_fixtures(self.world, config)}
-        self.links = {name: self.robot.links[name] for name in ("base_link", *ARM_LINKS, *GRIPPER_LINKS)}
+        self.geometry = geometry
+        self.kinematics = UR5Kinematics(tcp_offset=geometry.T_tool0_tcp)
+        self.client: int | None = p.connect(p.DIRECT)
+        p.setPhysicsEngineParameter(deterministicOverlappingPairs=1, physicsClientId=self.client)
+        self.robot = load_cell_robot(self.client, geometry, np.linalg.inv(self.kinematics.T_world_base))
+        joints, links = joint_and_link_indices(self.robot, self.client)
+        self.arm_joints = [joints[name] for name in JOINT_NAMES]
+        self.finger_joints = [joints[name] for name in FINGER_JOINTS]
+        self.obstacles: dict[str, int] = {"table": add_table(self.client), **add_fixtures(self.client, layout)}
+        self.links = {name: links[name] for name in ("base_link", *ARM_LINKS, *GRIPPER_LINKS)}
         self.self_pairs = self._self_pairs()
         self.solids: dict[str, np.ndarray] = {}  # cloud obstacles' points (with their shadow, no footprint)
         self.held: tuple[int, np.ndarray] | None = None  # (body, T_tcp_body) while holding
         self.ghost = self._load_ghost_gripper()
 
-    @property
-    def client(self) -> int:
-        return self.world.require()
-
     def close(self) -> None:
         """Free the collision model's client."""
-        self.world.disconnect()
+        if self.client is not None:
+            p.disconnect(self.client)
+            self.client = None
 
     def set_q(self, q: np.ndarray) -> None:
         """Put the model arm at q (fingers fully open: the widest the gripper gets)."""
-        self.robot.reset_arm(q)
-        for joint in self.robot.finger_joints:
-            p.resetJointState(self.robot.body, joint, self.robot.geometry.stroke / 2, 0.0, physicsClientId=self.client)
+        for joint, qi in zip(self.arm_joints, q):
+            p.resetJointState(self.robot, joint, float(qi), 0.0, physicsClientId=self.client)
+        for joint in self.finger_joints:
+            p.resetJointState(self.robot, joint, self.geometry.stroke / 2, 0.0, physicsClientId=self.client)
 
     def add_cloud(self, name: str, points: np.ndarray, eye: np.ndarray | None = None, depth: float = 0.03) -> None:
         """An obstacle from a single-view cloud (N, 3) in the base frame: the convex hull of the
@@ -90,16 +96,16 @@ class PlanningScene:
 
     def _load_ghost_gripper(self) -> int:
         """A free copy of the gripper, fingers open, parked far away: `gripper_collisions` moves it."""
-        path = write_cached("nift_gripper", standalone_gripper_urdf(self.robot.geometry))
+        path = write_cached("nift_gripper", standalone_gripper_urdf(self.geometry))
         body = p.loadURDF(str(path), [0.0, 0.0, -10.0], useFixedBase=True, physicsClientId=self.client)
         joints, _ = joint_and_link_indices(body, self.client)
         for name in FINGER_JOINTS:
-            p.resetJointState(body, joints[name], self.robot.geometry.stroke / 2, 0.0, physicsClientId=self.client)
+            p.resetJointState(body, joints[name], self.geometry.stroke / 2, 0.0, physicsClientId=self.client)
         return body
 
     def gripper_collisions(self, T_base_tcp: np.ndarray, ignore: tuple[str, ...] = ()) -> list[str]:
         """Obstacles (not in `ignore`) the open gripper alone would hit at a TCP pose - no arm, no IK."""
-        self.world.set_pose(self.ghost, T_base_tcp @ np.linalg.inv(self.robot.geometry.T_tool0_tcp))
+        set_pose(self.client, self.ghost, T_base_tcp @ np.linalg.inv(self.geometry.T_tool0_tcp))
         return self._obstacles_near(self.ghost, ignore)
 
     def _obstacles_near(self, body: int, ignore: tuple[str, ...]) -> list[str]:
@@ -134,10 +140,10 @@ class PlanningScene:
             for link, index in self.links.items():
                 if obstacle == "table" and link in ON_TABLE:
                     continue
-                if self._near(self.robot.body, body, index, -1):
+                if self._near(self.robot, body, index, -1):
                     found.append(f"{link}-{obstacle}")
         for a, b in self.self_pairs:
-            if self._near(self.robot.body, self.robot.body, self.links[a], self.links[b]):
+            if self._near(self.robot, self.robot, self.links[a], self.links[b]):
                 found.append(f"{a}-{b}")
         return found + self._held_collisions(q, ignore)
 
@@ -146,9 +152,9 @@ class PlanningScene:
         if self.held is None:
             return []
         body, T_tcp_body = self.held
-        self.world.set_pose(body, self.robot.kinematics.fk(q) @ T_tcp_body)
+        set_pose(self.client, body, self.kinematics.fk(q) @ T_tcp_body)
         found = [f"{HELD}-{name}" for name in self._obstacles_near(body, ignore)]
-        return found + [f"{HELD}-{link}" for link in ARM_LINKS if self._near(body, self.robot.body, -1, self.links[link])]
+        return found + [f"{HELD}-{link}" for link in ARM_LINKS if self._near(body, self.robot, -1, self.links[link])]
 
     def _near(self, body_a: int, body_b: int, link_a: int, link_b: int) -> bool:
         return len(p.getClosestPoints(body_a, body_b, self.margin, link_a, link_b, physicsClientId=self.client)) > 0
@@ -163,6 +169,6 @@ class PlanningScene:
         for a, b in itertools.combinations(self.links, 2):
             if abs(rank[a] - rank[b]) < 2:
                 continue
-            if not self._near(self.robot.body, self.robot.body, self.links[a], self.links[b]):
+            if not self._near(self.robot, self.robot, self.links[a], self.links[b]):
                 pairs.append((a, b))
         return pairs

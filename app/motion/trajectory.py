@@ -9,9 +9,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from ruckig import InputParameter, Result, Ruckig, Trajectory
+from ruckig import Trajectory
 
 from hardware.interfaces import JointLimits
+from hardware.motion_profile import ruckig_profile
 
 SAMPLE_PERIOD = 1.0 / 250.0  # s between trajectory samples streamed to the arm
 
@@ -32,21 +33,6 @@ class JointTrajectory:
     @property
     def end(self) -> np.ndarray:
         return self.q[-1]
-
-
-def ruckig_profile(q0: np.ndarray, q1: np.ndarray, v_max: np.ndarray, a_max: np.ndarray,
-                   j_max: np.ndarray) -> Trajectory:
-    """Time-optimal jerk-limited rest-to-rest trajectory from q0 to q1 (Ruckig, offline)."""
-    dof = len(q0)
-    inp = InputParameter(dof)
-    inp.current_position, inp.current_velocity, inp.current_acceleration = list(q0), [0.0] * dof, [0.0] * dof
-    inp.target_position, inp.target_velocity, inp.target_acceleration = list(q1), [0.0] * dof, [0.0] * dof
-    inp.max_velocity, inp.max_acceleration, inp.max_jerk = list(v_max), list(a_max), list(j_max)
-    traj = Trajectory(dof)
-    result = Ruckig(dof).calculate(inp, traj)
-    if result not in (Result.Working, Result.Finished):
-        raise ValueError(f"Ruckig could not plan the motion ({result})")
-    return traj
 
 
 def sample_profile(profile: Trajectory, period: float = SAMPLE_PERIOD) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

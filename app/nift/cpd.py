@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 from pycpd import RigidRegistration
 
-from app.se3 import make_pose
+from hardware.se3 import make_pose
 
 POINTS = 300  # both clouds are subsampled to this many points (CPD is O(M N) per iteration)
 

@@ -55,9 +55,9 @@ import torch
 
 from app.nift.field import NeuralField, load_field
 from app.nift.imitation_config import ImitationConfig
+from app.nift.schedule import cosine
 from app.nift.template import FEATURES, Template, point_features
-from app.schedule import cosine
-from app.se3 import make_pose, random_rotations
+from hardware.se3 import make_pose, random_rotations
 
 
 @dataclass

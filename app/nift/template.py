@@ -33,7 +33,7 @@ from app.io_utils import read_npz, write_npz
 from app.nift.field import Latent, NeuralField, field_path, load_field
 from app.nift.ibs import compute_ibs
 from app.nift.raycast import scene_of, signed_distance
-from app.se3 import invert, transform_points
+from hardware.se3 import invert, transform_points
 
 FORMAT = "nift-nit/2"
 OLDER_FORMATS = ("nift-nit/1",)  # readable headers, but no distances: rebuild from the demos

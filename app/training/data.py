@@ -33,9 +33,9 @@ from app.io_utils import write_json, write_npz
 from app.nift.raycast import scene_of
 from app.nift.scf import compute_scf
 from app.objects import IN_DOMAIN, check_category, generate, split
-from app.se3 import random_rotations
 from app.training.manifest import FORMAT, read_manifest
 from app.training.views import CAMERAS, observe
+from hardware.se3 import random_rotations
 
 
 @dataclass(frozen=True)

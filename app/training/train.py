@@ -28,8 +28,8 @@ import torch
 from tqdm import tqdm
 
 from app.io_utils import atomic_path
-from app.schedule import cosine
 from app.nift.field import FieldConfig, NeuralField, load_field, save_field
+from app.nift.schedule import cosine
 from app.training.dataset import FieldData
 from app.training.evaluate import evaluate, loss_of
 

@@ -11,12 +11,13 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import pybullet as p
 
-from app.motion.trajectory import ruckig_profile
-from app.se3 import interpolate_pose, line_length, pose_to_ur, ur_to_pose
+from hardware.bullet import p
 from hardware.interfaces import Arm, JointLimits, ProtectiveStopError
-from hardware.sim.robot import HOME_Q, SimRobot
+from hardware.motion_profile import ruckig_profile
+from hardware.robot_description import HOME_Q
+from hardware.se3 import interpolate_pose, line_length, pose_to_ur, ur_to_pose
+from hardware.sim.robot import SimRobot
 
 # Documented limits beyond the URDF (which gives position and velocity only).
 JOINT_ACCELERATION_LIMIT = np.array([8.0, 8.0, 8.0, 12.0, 12.0, 12.0])  # rad/s^2

@@ -8,10 +8,9 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
-import pybullet as p
 
+from hardware.bullet import p, pose_to_pybullet
 from hardware.sim.robot import SimRobot
-from hardware.sim.world import pose_to_pybullet
 
 
 def _quad_obj(width: float, height: float, cells: int = 24) -> str:

@@ -3,12 +3,12 @@ object without involving the arm (NDF's teleported evaluation)."""
 from __future__ import annotations
 
 import numpy as np
-import pybullet as p
 
-from hardware.sim.gripper_model import FINGER_JOINTS, FINGER_LINKS, GripperGeometry, standalone_gripper_urdf
+from hardware.bullet import joint_and_link_indices, p, pose_to_pybullet
+from hardware.gripper_geometry import FINGER_JOINTS, FINGER_LINKS, GripperGeometry, standalone_gripper_urdf
 from hardware.robot_description import write_cached
-from hardware.sim.robot import joint_and_link_indices, set_pad_friction
-from hardware.sim.world import SimWorld, pose_to_pybullet
+from hardware.sim.robot import set_pad_friction
+from hardware.sim.world import SimWorld
 
 
 class FloatingGripper:

@@ -4,8 +4,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import pybullet as p
 
+from hardware.bullet import p
 from hardware.interfaces import Gripper
 from hardware.sim.robot import SimRobot
 

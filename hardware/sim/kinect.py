@@ -18,8 +18,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-import pybullet as p
 
+from hardware.bullet import p
 from hardware.interfaces import CameraIntrinsics, DepthCamera, Frame
 from hardware.sim.world import SimWorld
 

@@ -7,32 +7,12 @@ resolved) and the gripper fragment, and written to the cache - nothing is copied
 from __future__ import annotations
 
 import numpy as np
-import pybullet as p
-from scipy.spatial.transform import Rotation
 
+from hardware.bullet import joint_and_link_indices, load_cell_robot, p, pybullet_to_pose
+from hardware.gripper_geometry import FINGER_JOINTS, FINGER_LINKS, GripperGeometry
 from hardware.kinematics import JOINT_NAMES, UR5Kinematics
-from hardware.robot_description import resolve_packages, ur5_urdf, write_cached
-from hardware.sim.gripper_model import FINGER_JOINTS, FINGER_LINKS, GripperGeometry, gripper_urdf_fragment
-from hardware.sim.world import SimWorld, pose_to_pybullet
-
-HOME_Q = np.array([np.pi, -2.2, 1.9, -1.27, -1.57, 0.0])  # TCP pointing down at (0.22, 0.11, 0.37), clear of the camera crop
-
-
-def cell_robot_urdf(geometry: GripperGeometry = GripperGeometry()) -> str:
-    """UR5 URDF text with absolute mesh paths and the gripper attached at tool0."""
-    text = resolve_packages(ur5_urdf().read_text())
-    cut = text.rindex("</robot>")
-    return text[:cut] + gripper_urdf_fragment(geometry) + "\n" + text[cut:]
-
-
-def joint_and_link_indices(body: int, client: int) -> tuple[dict[str, int], dict[str, int]]:
-    """({joint name: index}, {child link name: index}) of a multibody (a link's index is its joint's)."""
-    joints, links = {}, {}
-    for j in range(p.getNumJoints(body, physicsClientId=client)):
-        info = p.getJointInfo(body, j, physicsClientId=client)
-        joints[info[1].decode()] = j
-        links[info[12].decode()] = j
-    return joints, links
+from hardware.robot_description import HOME_Q
+from hardware.sim.world import SimWorld
 
 
 def set_pad_friction(body: int, finger_links: list[int], geometry: GripperGeometry, client: int) -> None:
@@ -64,11 +44,8 @@ class SimRobot:
         if self.body is not None:
             return self.body
         self.world.connect()
-        path = write_cached("ur5_nift_gripper", cell_robot_urdf(self.geometry))
         T_world_root = np.linalg.inv(self.kinematics.T_world_base)  # URDF root, seen from UR base
-        pos, quat = pose_to_pybullet(T_world_root)
-        self.body = p.loadURDF(str(path), pos, quat, useFixedBase=True,
-                               flags=p.URDF_USE_SELF_COLLISION_EXCLUDE_PARENT, physicsClientId=self.client)
+        self.body = load_cell_robot(self.client, self.geometry, T_world_root)
         names, self.links = joint_and_link_indices(self.body, self.client)
         self.arm_joints = [names[n] for n in JOINT_NAMES]
         self.finger_joints = [names[n] for n in FINGER_JOINTS]
@@ -99,7 +76,4 @@ class SimRobot:
         """World pose (4x4) of a link frame."""
         state = p.getLinkState(self.body, self.links[link], computeForwardKinematics=True,
                                physicsClientId=self.client)
-        T = np.eye(4)
-        T[:3, :3] = Rotation.from_quat(state[5]).as_matrix()
-        T[:3, 3] = state[4]
-        return T
+        return pybullet_to_pose(state[4], state[5])

@@ -9,17 +9,22 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-import pybullet as p
-from scipy.spatial.transform import Rotation
 
+from hardware import bullet
+from hardware.bullet import TABLE_HEIGHT, p, pybullet_to_pose
 from hardware.interfaces import DeviceNotConnectedError
-
-TABLE_SIZE = (1.6, 1.4, 0.05)  # x, y, thickness
-TABLE_CENTER_XY = (0.35, 0.0)
-TABLE_HEIGHT = 0.75  # table top above the floor
 
 
 @dataclass(frozen=True)
+class SimWorldConfig:
+    """Physics settings of the simulated cell."""
+
+    gui: bool = False
+    time_step: float = 1.0 / 240.0
+    solver_iterations: int = 80
+    gravity: float = -9.81
+
+
 class SimWorldConfig:
     """Physics settings of the simulated cell."""
 
@@ -71,8 +76,7 @@ class SimWorld:
         p.setPhysicsEngineParameter(fixedTimeStep=self.config.time_step,
                                     numSolverIterations=self.config.solver_iterations,
                                     deterministicOverlappingPairs=1, physicsClientId=self.client)
-        sx, sy, sz = TABLE_SIZE
-        self.table = self.add_box((sx, sy, sz), (*TABLE_CENTER_XY, -sz / 2), rgba=(0.75, 0.7, 0.62, 1))
+        self.table = bullet.add_table(self.client)
         self.floor = self.add_box((6.0, 6.0, 0.1), (0.0, 0.0, -TABLE_HEIGHT - 0.05), rgba=(0.5, 0.5, 0.5, 1))
         self.steps = 0
 
@@ -106,27 +110,12 @@ class SimWorld:
 
     def add_box(self, size, center, mass: float = 0.0, rgba=(0.6, 0.6, 0.6, 1), friction: float = 0.8) -> int:
         """A box body (static when mass = 0)."""
-        cid = self.require()
-        half = [s / 2 for s in size]
-        col = p.createCollisionShape(p.GEOM_BOX, halfExtents=half, physicsClientId=cid)
-        vis = p.createVisualShape(p.GEOM_BOX, halfExtents=half, rgbaColor=rgba, physicsClientId=cid)
-        body = p.createMultiBody(mass, col, vis, basePosition=list(center), physicsClientId=cid)
-        p.changeDynamics(body, -1, lateralFriction=friction, physicsClientId=cid)
-        return body
+        return bullet.add_box(self.require(), size, center, mass, rgba, friction)
 
     def add_mesh(self, visual_obj: Path, collision_obj: Path, T_world_body: np.ndarray, mass: float = 0.0,
                  scale: float = 1.0, rgba=(0.6, 0.7, 0.9, 1), friction: float = 0.8) -> int:
         """A body from a visual OBJ and a collision OBJ (one convex hull per `o` block)."""
-        cid = self.require()
-        s = [scale] * 3
-        col = p.createCollisionShape(p.GEOM_MESH, fileName=str(collision_obj), meshScale=s, physicsClientId=cid)
-        vis = p.createVisualShape(p.GEOM_MESH, fileName=str(visual_obj), meshScale=s, rgbaColor=rgba,
-                                  physicsClientId=cid)
-        pos, quat = pose_to_pybullet(T_world_body)
-        body = p.createMultiBody(mass, col, vis, basePosition=pos, baseOrientation=quat, physicsClientId=cid)
-        p.changeDynamics(body, -1, lateralFriction=friction, spinningFriction=0.002, rollingFriction=0.0005,
-                         physicsClientId=cid)
-        return body
+        return bullet.add_mesh(self.require(), visual_obj, collision_obj, T_world_body, mass, scale, rgba, friction)
 
     def remove(self, body: int) -> None:
         """Remove a body."""
@@ -138,9 +127,7 @@ class SimWorld:
 
     def set_pose(self, body: int, T: np.ndarray) -> None:
         """Teleport a body (velocity zeroed)."""
-        cid = self.require()
-        p.resetBasePositionAndOrientation(body, *pose_to_pybullet(T), physicsClientId=cid)
-        p.resetBaseVelocity(body, [0, 0, 0], [0, 0, 0], physicsClientId=cid)
+        bullet.set_pose(self.require(), body, T)
 
     def in_contact(self, a: int, b: int) -> bool:
         """True if bodies a and b touch after the last step."""

@@ -11,14 +11,14 @@ imitation, Eq. 5), "nift" = "ibs-nif", and "cpd" (demo registration). Every meth
   (when it is known, as in simulation), and with a rigid grasp the gripper's place pose is
   motion @ T_base_tcp.
 
-Template methods rank their candidate poses by feasibility first (`app.feasibility`, our addition):
+Template methods rank their candidate poses by feasibility first (`app.predict.feasibility`, our addition):
 a grasp must close on cloud points, a place must be one the grasp could carry the object to as in
 the demos. Then both poses are centred on the cloud (our addition): the grasp on the points between
-the fingers (`app.grasp_centering`), a hang on the peg in the middle of the hole's gap
-(`app.peg_centering`; fixtures without a peg are left alone) - on by default, for every method
+the fingers (`app.predict.grasp_centering`), a hang on the peg in the middle of the hole's gap
+(`app.predict.peg_centering`; fixtures without a peg are left alone) - on by default, for every method
 alike. Optionally (`align`, off by default: it needs the normals a fused cloud gives and one
 Kinect view does not) the grasp is first turned so its fingers close along the normal of the wall
-between them (`app.grasp_alignment`, our addition).
+between them (`app.predict.grasp_alignment`, our addition).
 """
 from __future__ import annotations
 
@@ -28,19 +28,20 @@ from pathlib import Path
 
 import numpy as np
 
-from app.feasibility import Reach, all_of, carries_like_demos, grips_something, reaches, reaches_at_place
-from app.grasp_alignment import align_grasp
-from app.grasp_centering import center_grasp
+from app.layout import CellLayout
 from app.nift.cpd import best_registration
-from app.methods import check_method
-from app.objects import fixture
-from app.peg_centering import center_on_peg
 from app.nift.field import load_field
 from app.nift.imitate import ImitationConfig, imitate
 from app.nift.template import FEATURES, field_override
-from app.recorder import DEMOS_DIR, STAGES, stage_anchor, task_demos, task_templates
-from app.se3 import invert
-from app.tasks import Task
+from app.objects import fixture
+from app.predict.feasibility import Reach, all_of, carries_like_demos, grips_something, reaches, reaches_at_place
+from app.predict.grasp_alignment import align_grasp
+from app.predict.grasp_centering import center_grasp
+from app.predict.methods import check_method
+from app.predict.peg_centering import center_on_peg
+from app.tasks.library import DEMOS_DIR, STAGES, stage_anchor, task_demos, task_templates
+from app.tasks.task import Task
+from hardware.se3 import invert
 
 
 @dataclass
@@ -75,10 +76,10 @@ def predict(t: Task, cloud: np.ndarray, method: str = "nift", T_base_fixture: np
     """Grasp pose and place motion for a target cloud (N, 3) in the base frame (`nif`: other field
     weights, a NIF file or a directory of nif.pt and ndf.pt (`field_override`), default the shipped
     ones; `center`: centre the grasp on the points between the fingers and a hang on the peg,
-    `app.grasp_centering` and `app.peg_centering`; `feasible`: prefer feasible poses,
-    `app.feasibility`; `reachable`: whether the cell can put its TCP at a pose - given, a template
+    `app.predict.grasp_centering` and `app.predict.peg_centering`; `feasible`: prefer feasible poses,
+    `app.predict.feasibility`; `reachable`: whether the cell can put its TCP at a pose - given, a template
     method's feasible grasps and places are also ones it can reach; `align`: turn the grasp so the
-    fingers close along the normal of the wall between them, `app.grasp_alignment`)."""
+    fingers close along the normal of the wall between them, `app.predict.grasp_alignment`)."""
     pred = _predict(t, cloud, method, T_base_fixture, directory, config, nif, feasible, reachable)
     pred.T_base_tcp = refine_grasp(pred.T_base_tcp, cloud, center=center, align=align)
     if center:
@@ -108,9 +109,7 @@ def _predict(t: Task, cloud: np.ndarray, method: str, T_base_fixture: np.ndarray
     key = check_method(method)
     directory = directory or DEMOS_DIR / t.demos
     if T_base_fixture is None:
-        from app.cell import CellConfig
-
-        T_base_fixture = CellConfig().fixture_pose(t.fixture)
+        T_base_fixture = CellLayout().fixture_pose(t.fixture)
     if key == "cpd":
         return _predict_cpd(method, t, cloud, T_base_fixture, directory)
     query, feature = key.split("-")

@@ -1,19 +1,21 @@
 """Running eye-to-hand calibration on the simulated cell: mount the board, visit views, solve."""
 from __future__ import annotations
 
+import sys
 import time
 from dataclasses import dataclass
+from pathlib import Path
 
 import cv2
 import numpy as np
 
-from app.cell import SimCell
-from app.se3 import invert, make_pose, rotation_angle
+from app.sim.cell import SimCell
 from calibration.board import BoardSpec
 from calibration.eye_to_hand import CalibrationResult, aim_poses, collect, solve
-from hardware.robot_description import cache_dir
+from calibration.store import load_calibration, save_calibration
+from hardware.robot_description import HOME_Q, cache_dir
+from hardware.se3 import invert, make_pose, rotation_angle
 from hardware.sim.flange_plate import FlangePlate
-from hardware.sim.robot import HOME_Q
 
 BOARD_OFFSET = 0.125  # m along tool0's z: the board plate sits just past the fingertips
 
@@ -58,3 +60,12 @@ def result_record(c: CellCalibration) -> dict:
             "hand_eye_residual_mm": r.residual_mm, "hand_eye_residual_deg": r.residual_deg,
             "T_tcp_board": r.T_tcp_board.tolist(), "seconds": c.seconds,
             "sim_truth_error_mm": c.error_mm, "sim_truth_error_deg": c.error_deg}
+
+
+def ensure_calibration(cell, path: Path):
+    """T_base_cam from the calibration file (never the simulator's truth); calibrate first if it is missing."""
+    if not path.exists():
+        print(f"no calibration file {path}: calibrating the cell first", file=sys.stderr)
+        c = calibrate_sim_cell(cell)
+        save_calibration(path, c.result.T_base_cam, result_record(c))
+    return load_calibration(path)[0]

@@ -5,10 +5,10 @@ from __future__ import annotations
 import numpy as np
 import trimesh
 
-from app.methods import ORACLE
-from app.predict import Prediction
-from app.se3 import invert
-from app.tasks import Task, teacher_grasp, teacher_place
+from app.predict.methods import ORACLE
+from app.predict.predict import Prediction
+from app.tasks.task import Task, teacher_grasp, teacher_place
+from hardware.se3 import invert
 
 
 def teacher_prediction(t: Task, mesh: trimesh.Trimesh, scale: float, T_base_obj: np.ndarray,

@@ -11,14 +11,14 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import pybullet as p
 import trimesh
 
-from app.cell import WORKSPACE
 from app.objects import generate
 from app.objects.collision import collision_model, visual_model
-from app.se3 import make_pose, random_rotations, rotvec_to_matrix
-from hardware.sim.world import SimWorld, pose_to_pybullet
+from app.sim.cell import WORKSPACE
+from hardware.bullet import p, pose_to_pybullet
+from hardware.se3 import make_pose, random_rotations, rotvec_to_matrix
+from hardware.sim.world import SimWorld
 
 MASS = {"mug": 0.30, "bowl": 0.30, "bottle": 0.45, "vase": 0.50}  # kg at scale 1
 POSES = ("upright", "arbitrary")

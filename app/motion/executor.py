@@ -26,10 +26,10 @@ from app.motion.cartesian import line_path
 from app.motion.ik import IKConfig, NoIKSolution, solutions
 from app.motion.scene import PlanningScene
 from app.motion.trajectory import JointTrajectory, concatenate, joint_segment, path_timing
-from app.se3 import line_length, make_pose, rotvec_to_matrix
 from hardware.interfaces import Arm, JointLimits
 from hardware.kinematics import UR5Kinematics
-from hardware.sim.robot import HOME_Q
+from hardware.robot_description import HOME_Q
+from hardware.se3 import line_length, make_pose, rotvec_to_matrix
 
 HALF_TURN = make_pose(rotvec_to_matrix([0.0, 0.0, np.pi]))
 OBJECT = "object"  # the planning scene's name for the observed object's hull

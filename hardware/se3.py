@@ -1,6 +1,8 @@
-"""SE(3) helpers: the one home for pose composition, inversion, rotation vectors and random rotations.
+"""SE(3) helpers, the bottom of the house: pose composition, inversion, rotation vectors, random rotations.
 
-Conventions (see DESIGN.md): a pose is a 4x4 homogeneous float64 array; `T_a_b` maps coordinates
+Pure numpy and SciPy; every layer may import it, the device layer and the method library included.
+
+Conventions (docs/design.md): a pose is a 4x4 homogeneous float64 array; `T_a_b` maps coordinates
 in frame b into frame a, so `T_a_c = T_a_b @ T_b_c`. At device boundaries poses may be UR-style
 `[x, y, z, rx, ry, rz]` with a rotation vector (axis * angle, radians). Rotation maths is SciPy's
 `Rotation`; this module only fixes the conventions around it.

@@ -39,8 +39,8 @@ from collections.abc import Callable
 import numpy as np
 from scipy.spatial import cKDTree
 
-from app.grasp_centering import swept_points
-from app.se3 import invert
+from app.predict.grasp_centering import swept_points
+from hardware.se3 import invert
 
 Predicate = Callable[[np.ndarray], np.ndarray]  # poses (K, 4, 4) -> (K,) bool
 Reach = Callable[[np.ndarray], bool]  # a TCP pose (4, 4) -> can the cell put its TCP there

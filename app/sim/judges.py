@@ -1,4 +1,4 @@
-"""Success judges of the benchmark (NDF's protocol, see DESIGN.md), with the thresholds named.
+"""Success judges of the benchmark (NDF's protocol, docs/benchmark.md), with the thresholds named.
 
 Both judges consume the scene: they move the object. Run them on a freshly spawned object.
 
@@ -17,12 +17,12 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import pybullet as p
 
-from app.spawn import SpawnedObject, hold, release
+from app.sim.spawn import SpawnedObject, hold, release
+from hardware.bullet import p
+from hardware.gripper_geometry import GripperGeometry
 from hardware.sim.floating_gripper import FloatingGripper
 from hardware.sim.gripper import SimGripper, SimGripperConfig
-from hardware.sim.gripper_model import GripperGeometry
 from hardware.sim.world import SimWorld
 
 GRASP_FORCE = 40.0  # N

@@ -1,13 +1,33 @@
-"""The optimiser options `nift imitate` and `nift bench-imitation` share, with ImitationConfig's defaults."""
+"""Options several verbs share: the cell's --config (a TOML CellConfig, camera seeded by --seed) and
+the optimiser options of `nift imitate` and `nift bench-imitation`, with ImitationConfig's defaults."""
 from __future__ import annotations
 
 import argparse
+from dataclasses import replace
+from pathlib import Path
+
+
+def add_config_argument(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--config", type=Path, help="cell configuration TOML (see configs/cell.toml)")
+
+
+def cell_config(args: argparse.Namespace, gui: bool = False):
+    """CellConfig from --config (or the defaults), with the camera seeded by --seed."""
+    from app.config import load_toml
+    from app.sim.cell import CellConfig
+
+    config = load_toml(CellConfig, args.config) if args.config else CellConfig()
+    config = replace(config, camera_seed=args.seed)
+    if gui:
+        config = replace(config, world=replace(config.world, gui=True))
+    return config
 
 
 def add_imitation_arguments(p: argparse.ArgumentParser) -> None:
     """--inits, --iterations, --prune-every, --patience, --explore-points, --{grasp,place}-contact-scale,
     --place-demo-match."""
-    from app.nift.imitation_config import DEMO_MATCHES, ImitationConfig as C
+    from app.nift.imitation_config import DEMO_MATCHES
+    from app.nift.imitation_config import ImitationConfig as C
 
     p.add_argument("--inits", type=int, default=C.inits, help=f"parallel initialisations (paper: 10; default {C.inits})")
     p.add_argument("--iterations", type=int, default=C.iterations,

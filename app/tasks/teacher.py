@@ -6,12 +6,11 @@ Poses are in the object's canonical frame (scaled instance) or the fixture's fra
 from __future__ import annotations
 
 import numpy as np
-
 import trimesh
 
 from app.nift.raycast import cast, make_scene
 from app.objects import Fixture, Semantics, semantics
-from app.se3 import make_pose
+from hardware.se3 import make_pose
 
 # Tool frame at the TCP: z out of the flange (the approach direction), fingers close along y.
 GRASP_DEPTH = {"mug": 0.025, "bowl": 0.012, "vase": 0.02}  # fingertips below the rim, metres

@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from hardware.sim.gripper_model import GripperGeometry
+from hardware.gripper_geometry import GripperGeometry
 
 MIN_POINTS = 5  # fewer points between the fingers than this: nothing to centre on
 

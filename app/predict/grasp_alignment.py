@@ -1,6 +1,6 @@
 """Turn a predicted grasp so its fingers close along the surface normal of what lies between them.
 
-Our addition (not in the paper), applied to every method alike, like `app.grasp_centering`. In the
+Our addition (not in the paper), applied to every method alike, like `app.predict.grasp_centering`. In the
 fused bench the lowest-loss NIFT rim grasps of mugs and bowls came tilted 11-28 degrees off the
 rim's wall: the flat pads then touch the wall along an edge and the object slips out on the lift
 (traced on 16 upright trials that failed: turned as below, 15 held; `scripts/diagnose_grasp_slips.py`).
@@ -25,8 +25,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from app.grasp_centering import MIN_POINTS, swept_mask
-from hardware.sim.gripper_model import GripperGeometry
+from app.predict.grasp_centering import MIN_POINTS, swept_mask
+from hardware.gripper_geometry import GripperGeometry
 
 NORMAL_NEIGHBOURS = 12  # points per normal estimate (Open3D's k-nearest search)
 MAX_ANGLE = np.radians(45.0)  # larger turns are left undone

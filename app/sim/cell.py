@@ -1,20 +1,16 @@
 """The simulated cell: one PyBullet world with the table, the rack, the shelf, the UR5 with its
 gripper and the Kinect v2, wired to the device interfaces the application talks to.
 
-Layout (base frame, metres): the robot base at the origin on the table top (z = 0); objects are
-spawned in WORKSPACE in front of it; the rack stands to its left with the peg pointing back at
-the robot and up at 45 degrees; the shelf stands to its right; the Kinect looks at the workspace
-from the front. Edit `CellConfig` (or its TOML, later) to move things.
+The fixtures stand where the cell's layout says (`app.layout.CellLayout`); objects are spawned in
+WORKSPACE in front of the robot; the Kinect looks at the workspace from the front. Edit
+`CellConfig` (or its TOML, configs/cell.toml) to move things.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
 
-import numpy as np
-
-from app.objects import fixture
-from app.objects.collision import collision_model, visual_model
-from app.se3 import make_pose, rotvec_to_matrix
+from app.layout import CellLayout
+from app.layout import add_fixtures as add_layout_fixtures
 from hardware.sim.arm import SimArm, SimArmConfig
 from hardware.sim.gripper import SimGripper, SimGripperConfig
 from hardware.sim.kinect import NoiseModel, SimKinect, SimKinectConfig, look_at
@@ -25,33 +21,21 @@ WORKSPACE = ((0.40, 0.62), (-0.12, 0.14))  # x range, y range on the table for s
 
 
 @dataclass(frozen=True)
-class CellConfig:
-    """Where everything stands in the simulated cell."""
+class CellConfig(CellLayout):
+    """Where everything stands in the simulated cell: the layout, the devices' settings, the camera."""
 
     world: SimWorldConfig = SimWorldConfig()
     arm: SimArmConfig = SimArmConfig()
     gripper: SimGripperConfig = SimGripperConfig()
-    rack_xy_yaw: tuple[float, float, float] = (0.55, 0.40, np.pi)  # peg points back towards the robot
-    shelf_xy_yaw: tuple[float, float, float] = (0.50, -0.45, 0.0)
     camera_eye: tuple[float, float, float] = (1.25, 0.0, 0.55)
     camera_target: tuple[float, float, float] = (0.50, 0.0, 0.05)
     camera_seed: int = 0
     camera_noise: bool = True
 
-    def fixture_pose(self, name: str) -> np.ndarray:
-        """T_base_fixture of 'rack' or 'shelf'."""
-        x, y, yaw = self.rack_xy_yaw if name == "rack" else self.shelf_xy_yaw
-        return make_pose(rotvec_to_matrix([0.0, 0.0, yaw]), [x, y, 0.0])
 
-
-def add_fixtures(world: SimWorld, config: CellConfig) -> dict[str, int]:
+def add_fixtures(world: SimWorld, config: CellLayout) -> dict[str, int]:
     """Build the rack and the shelf in a world at their configured poses; {name: body}."""
-    bodies = {}
-    for name in ("rack", "shelf"):
-        mesh = fixture(name).mesh
-        bodies[name] = world.add_mesh(visual_model(mesh), collision_model(mesh), config.fixture_pose(name),
-                                      rgba=(0.55, 0.4, 0.3, 1))
-    return bodies
+    return add_layout_fixtures(world.require(), config)
 
 
 class SimCell:

@@ -7,7 +7,7 @@ import numpy as np
 import trimesh
 
 from app.objects import fixture, semantics
-from app.teacher import grasp_pose, hang_pose, shelf_pose
+from app.tasks.teacher import grasp_pose, hang_pose, shelf_pose
 
 
 @dataclass(frozen=True)

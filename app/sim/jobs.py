@@ -13,16 +13,16 @@ from typing import Callable
 
 import numpy as np
 
-from app.cell import SimCell
 from app.jobs import JobConfig, JobHooks, JobResult, run_job
-from app.judges import resting_verdict
-from app.methods import ORACLE
 from app.motion.scene import PlanningScene
 from app.objects import split
-from app.oracle import teacher_prediction
-from app.snapshots import save_strip, snapshot
-from app.spawn import SCALE_RANGE, SpawnedObject, release, spawn
-from app.tasks import Task
+from app.predict.methods import ORACLE
+from app.sim.cell import SimCell
+from app.sim.judges import resting_verdict
+from app.sim.oracle import teacher_prediction
+from app.sim.snapshots import save_strip, snapshot
+from app.sim.spawn import SCALE_RANGE, SpawnedObject, release, spawn
+from app.tasks.task import Task
 from hardware.sim.world import SimWorld
 
 SETTLE_TIME = 1.0  # s the object is left to come to rest before the verdict

@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from app.io_utils import read_npz, write_npz
-from app.se3 import invert
+from hardware.se3 import invert
 
 FORMAT = "nift-demo/1"
 POSES = ("T_base_obj", "T_base_tcp", "T_fixture_obj", "T_base_fixture", "T_base_cam")

@@ -4,9 +4,9 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
-import pybullet as p
 
 from app.io_utils import atomic_path
+from hardware.bullet import p
 from hardware.sim.world import SimWorld
 
 VIEW_EYE = (1.25, 0.75, 0.75)  # a viewer in front of the robot, to its left, above the table

@@ -6,7 +6,7 @@ from manifold3d import Manifold
 
 from app.objects import fixture
 from app.objects.solids import to_trimesh
-from hardware.sim.gripper_model import GripperGeometry
+from hardware.gripper_geometry import GripperGeometry
 
 ANCHORS = ("gripper", "rack", "shelf")
 

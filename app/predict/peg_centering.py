@@ -1,6 +1,6 @@
 """Centre a predicted hang on the peg: the peg must run through free space in the object's cloud.
 
-Our addition (not in the paper), the place's counterpart of `app.grasp_centering`. On the rack the
+Our addition (not in the paper), the place's counterpart of `app.predict.grasp_centering`. On the rack the
 imitated pose pins the mug's handle hole well across the hole (a few millimetres) but poorly along
 its long axis: the hole is 3-6 cm long there and the field's features change slowly along it, so the
 hole's centre ended 15-35 mm off the peg in most failed hangs (`scripts/diagnose_peg_centering.py`).
@@ -20,7 +20,7 @@ from __future__ import annotations
 import numpy as np
 
 from app.objects import Fixture
-from app.se3 import invert, make_pose, transform_points
+from hardware.se3 import invert, make_pose, transform_points
 
 LANE = 0.004  # metres: half-height of the lane level with the peg's axis
 REACH = 0.06  # metres: how far along e_2 the lane reaches either side of the peg

@@ -1,0 +1,24 @@
+"""Time-optimal, jerk-limited rest-to-rest profiles (Ruckig), as a robot controller plans a moveJ.
+
+The simulated arm's controller and the application's trajectory planner both use it, so it lives
+in the hardware layer with no import of the application.
+"""
+from __future__ import annotations
+
+import numpy as np
+from ruckig import InputParameter, Result, Ruckig, Trajectory
+
+
+def ruckig_profile(q0: np.ndarray, q1: np.ndarray, v_max: np.ndarray, a_max: np.ndarray,
+                   j_max: np.ndarray) -> Trajectory:
+    """Time-optimal jerk-limited rest-to-rest trajectory from q0 to q1 (Ruckig, offline)."""
+    dof = len(q0)
+    inp = InputParameter(dof)
+    inp.current_position, inp.current_velocity, inp.current_acceleration = list(q0), [0.0] * dof, [0.0] * dof
+    inp.target_position, inp.target_velocity, inp.target_acceleration = list(q1), [0.0] * dof, [0.0] * dof
+    inp.max_velocity, inp.max_acceleration, inp.max_jerk = list(v_max), list(a_max), list(j_max)
+    traj = Trajectory(dof)
+    result = Ruckig(dof).calculate(inp, traj)
+    if result not in (Result.Working, Result.Finished):
+        raise ValueError(f"Ruckig could not plan the motion ({result})")
+    return traj
