@@ -9,6 +9,7 @@ from __future__ import annotations
 import ast
 import subprocess
 import sys
+from functools import lru_cache
 from pathlib import Path
 
 import pytest
@@ -58,10 +59,16 @@ def imports_of(source: str, modules: dict[str, Path]) -> set[str]:
     return found
 
 
+@lru_cache(maxsize=1)
+def _tree_graph() -> dict[str, frozenset[str]]:
+    modules = our_modules()
+    return {name: frozenset(imports_of(path.read_text(), modules)) for name, path in modules.items()}
+
+
 def graph(planted: dict[str, str] | None = None) -> dict[str, set[str]]:
     """{module: our modules it imports}; `planted` adds modules from source text (to test the rules)."""
     modules = our_modules()
-    edges = {name: imports_of(path.read_text(), modules) for name, path in modules.items()}
+    edges = {name: set(targets) for name, targets in _tree_graph().items()}
     return edges | {name: imports_of(text, modules) for name, text in (planted or {}).items()}
 
 

@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 
-from app import se3
+from hardware import se3
 
 
 def test_invert_compose_round_trip(rng):

@@ -3,7 +3,6 @@ import pytest
 
 from hardware.interfaces import DeviceNotConnectedError, ProtectiveStopError
 from hardware.robot_description import HOME_Q
-from hardware.se3 import pose_to_ur
 from hardware.sim.arm import SimArm, SimArmConfig
 from hardware.sim.gripper import SimGripper, SimGripperConfig
 from hardware.sim.robot import SimRobot
@@ -110,11 +109,33 @@ def test_gripper_closes_on_nothing_and_opens(rig):
         gripper.open(width=0.2)
 
 
+UR5_DH = {"d": [0.089159, 0, 0, 0.10915, 0.09465, 0.0823], "a": [0, -0.425, -0.39225, 0, 0, 0],
+          "alpha": [np.pi / 2, 0, 0, np.pi / 2, -np.pi / 2, 0]}  # Universal Robots' published UR5 parameters
+
+
+def ur5_dh_fk(q: np.ndarray) -> np.ndarray:
+    """base -> tool0 from the standard DH table: independent of Pinocchio and of the URDF."""
+    T = np.eye(4)
+    for qi, d, a, alpha in zip(q, UR5_DH["d"], UR5_DH["a"], UR5_DH["alpha"]):
+        ct, st, ca, sa = np.cos(qi), np.sin(qi), np.cos(alpha), np.sin(alpha)
+        T = T @ np.array([[ct, -st * ca, st * sa, a * ct], [st, ct * ca, -ct * sa, a * st], [0, sa, ca, d], [0, 0, 0, 1]])
+    return T
+
+
 def test_tcp_pose_matches_ur_convention(rig):
+    from scipy.spatial.transform import Rotation
+
     _, robot, arm, _ = rig
+    # UR5 at zero joints: tool0 at (a2 + a3, -(d4 + d6), d1 - d5), the arm stretched out along -x
+    assert np.allclose(robot.kinematics.fk(np.zeros(6))[:3, 3] - robot.kinematics.fk(np.zeros(6))[:3, :3]
+                       @ [0, 0, robot.geometry.tcp_z], [-0.81725, -0.19145, -0.005491], atol=1e-5)
     q = arm.getActualQ()
-    assert np.allclose(arm.getActualTCPPose(), pose_to_ur(robot.kinematics.fk(q)))
-    assert np.allclose(arm.getTCPOffset()[:3], [0, 0, robot.geometry.tcp_z])
+    expected = ur5_dh_fk(q)
+    expected[:3, 3] += expected[:3, :3] @ [0, 0, 0.100]  # the TCP 0.100 m along tool0's z (our gripper)
+    pose = np.asarray(arm.getActualTCPPose())
+    assert np.allclose(pose[:3], expected[:3, 3], atol=1e-5)
+    assert np.allclose(Rotation.from_rotvec(pose[3:]).as_matrix(), expected[:3, :3], atol=1e-5)
+    assert np.allclose(arm.getTCPOffset()[:3], [0, 0, 0.100])
 
 
 def test_stepping_is_deterministic():

@@ -5,7 +5,10 @@ import numpy as np
 import pytest
 
 from app.cli import main
+from app.cloud_io import load_cloud
 from app.nift.template import load_template
+from app.objects.fixtures import SHELF_SIZE, SHELF_TOP
+from app.sim.cell import CellConfig
 from app.tasks.demo import load_demo
 
 
@@ -27,13 +30,22 @@ def test_teach_records_verified_demos_and_imitate_uses_them(tmp_path, capsys):
     assert main(["capture", "--category", "bottle", "--out", str(cloud), "--image", str(tmp_path / "rgb.png"),
                  "--calibration", str(calibration), "--json"]) == 0
     capsys.readouterr()
+    points = load_cloud(cloud)  # (N, 3) the unseen upright bottle, base frame
+    board_xy, board_half = CellConfig().fixture_pose("shelf")[:2, 3], SHELF_SIZE[0] / 2
     for method in ("nift", "cpd"):
         assert main(["imitate", "--task", "bottle", "--cloud", str(cloud), "--demos", str(out), "--method", method,
                      "--iterations", "60", "--json"]) == 0
         pred = json.loads(capsys.readouterr().out)
-        T = np.array(pred["T_base_tcp"])
-        assert np.allclose(T[:3, :3] @ T[:3, :3].T, np.eye(3), atol=1e-6)
         assert pred["method"] == method
+        # the grasp is on the bottle: the TCP within a neck's radius of the cloud
+        T_grasp = np.array(pred["T_base_tcp"])
+        assert np.linalg.norm(points - T_grasp[:3, 3], axis=1).min() < 0.03, method
+        # the place motion sets the bottle upright on the shelf board, resting on its top
+        motion = np.array(pred["motion"])
+        placed = points @ motion[:3, :3].T + motion[:3, 3]
+        assert np.all(np.abs(placed.mean(axis=0)[:2] - board_xy) < board_half), method
+        assert abs(placed[:, 2].min() - SHELF_TOP) < 0.025, method
+        assert motion[2, 2] > np.cos(np.radians(30)), method  # the bottle's up stays up
 
 
 def test_imitate_refuses_bad_input(tmp_path, capsys):

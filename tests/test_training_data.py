@@ -5,11 +5,13 @@ import numpy as np
 import pytest
 
 from app.cli import main
+from app.nift.field import load_field
 from app.nift.raycast import scene_of, unsigned_distance
 from app.nift.scf import compute_scf
 from app.objects import generate
 from app.training.data import DataConfig, make_dataset, shard_name
 from app.training.dataset import FieldData
+from app.training.evaluate import evaluate
 from app.training.views import camera_poses, kinect_cloud, observe
 from hardware.sim.kinect import NoiseModel
 
@@ -100,9 +102,19 @@ def test_make_data_and_train_verbs_quick(tmp_path, capsys):
     assert main(["train", "--target", "occ", "--data", str(data), "--eval-data", str(data),
                  "--out", str(tmp_path / "run"), "--quick", "--json"]) == 0
     card = json.loads(capsys.readouterr().out)
-    assert card["name"] == "NDF" and 0.0 <= card["test"]["occ_accuracy"] <= 1.0
-    assert (tmp_path / "run" / "field.pt").is_file() and (tmp_path / "run" / "last.pt").is_file()
-    # resume: a second run with one more epoch continues from the checkpoint
+    assert card["name"] == "NDF" and (tmp_path / "run" / "last.pt").is_file()
+    # round trip: the saved weights, evaluated again on the same data, give the card's test figures
+    field = load_field(tmp_path / "run" / "field.pt")
+    test = FieldData(data)
+    again = evaluate(field, test, np.arange(test.n_samples), test.cloud.shape[1], card["training"]["query_points"])
+    assert again["occ_accuracy"] == card["test"]["occ_accuracy"] and again["loss"] == pytest.approx(card["test"]["loss"])
+    assert again["occupied_share"] == pytest.approx(float(test.occ.mean()), abs=0.1)  # labels as made, drawn
+    assert sum(p.numel() for p in field.parameters()) == card["architecture"]["parameters"]
+    first_history = json.loads((tmp_path / "run" / "field.json").read_text())["history"]
+    assert len(first_history) == 1
+    # resume: a second run with one more epoch continues from the checkpoint instead of starting again
     assert main(["train", "--target", "occ", "--data", str(data), "--out", str(tmp_path / "run"),
                  "--quick", "--epochs", "2", "--resume", "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["training"]["epochs"] == 2
+    history = json.loads((tmp_path / "run" / "field.json").read_text())["history"]
+    assert len(history) == 2 and history[0] == first_history[0]  # the first epoch is the one already trained

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import sys
 from pathlib import Path
 
 from app.console.options import add_config_argument, cell_config
@@ -35,6 +34,7 @@ def run(args: argparse.Namespace) -> int:
     from app.io_utils import atomic_path
     from app.objects import split
     from app.perception import object_cloud
+    from app.sim.calibration import ensure_calibration
     from app.sim.cell import SimCell
     from app.sim.spawn import SCALE_RANGE, spawn
 

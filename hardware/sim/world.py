@@ -25,28 +25,6 @@ class SimWorldConfig:
     gravity: float = -9.81
 
 
-class SimWorldConfig:
-    """Physics settings of the simulated cell."""
-
-    gui: bool = False
-    time_step: float = 1.0 / 240.0
-    solver_iterations: int = 80
-    gravity: float = -9.81
-
-
-def pose_to_pybullet(T: np.ndarray) -> tuple[list[float], list[float]]:
-    """4x4 pose -> (position, xyzw quaternion) as PyBullet wants them."""
-    return T[:3, 3].tolist(), Rotation.from_matrix(T[:3, :3]).as_quat().tolist()
-
-
-def pybullet_to_pose(position, quaternion) -> np.ndarray:
-    """(position, xyzw quaternion) -> 4x4 pose."""
-    T = np.eye(4)
-    T[:3, :3] = Rotation.from_quat(quaternion).as_matrix()
-    T[:3, 3] = position
-    return T
-
-
 class SimWorld:
     """A PyBullet physics client with the cell's static surroundings."""
 
