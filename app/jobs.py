@@ -43,7 +43,7 @@ class JobConfig:
     demos: Path | None = None  # task directory (default demos/<task>)
     center_grasp: bool = True  # centre the grasp between the fingers and a hang on the peg (app.predict.grasp_centering, app.predict.peg_centering)
     align_grasp: bool = False  # turn the grasp square to the wall between the fingers (app.predict.grasp_alignment): off, as
-    # one Kinect's normals at a rim are too far off (README, "Grasp alignment")
+    # one Kinect's normals at a rim are too far off (docs/additions.md, "Grasp alignment")
     feasible: bool = True  # prefer grasps that close on something, places the grasp can carry to, and poses
     # the cell can reach (app.predict.feasibility, app.motion.ik.reach_check)
     perception: PerceptionConfig = PerceptionConfig()

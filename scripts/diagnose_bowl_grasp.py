@@ -1,4 +1,4 @@
-"""Why NIFT's 10-demo bowl grasp template fails upright (README, Results, "Fewer demos").
+"""Why NIFT's 10-demo bowl grasp template fails upright (docs/additions.md, "Fewer demos").
 
 Usage (repo root): .venv/bin/python scripts/diagnose_bowl_grasp.py [offsets|single|cross]
   offsets  predicted vs teacher grasp on 6 test bowls, in the bowl frame (radius r, height z)

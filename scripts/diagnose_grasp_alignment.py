@@ -1,5 +1,5 @@
 """How far grasp alignment turns the scripted teacher's (square) grasps, by where the normals come from:
-the mesh itself (its face normals), four fused cameras, or the cell's one Kinect (README, "Grasp alignment").
+the mesh itself (its face normals), four fused cameras, or the cell's one Kinect (docs/additions.md, "Grasp alignment").
 
 Usage (repo root): .venv/bin/python scripts/diagnose_grasp_alignment.py TASK POSE TRIAL... [--seed 0]
 e.g. `bowl upright 0-8` (about 1 s per trial). The trials are `nift bench`'s: the same objects, poses

@@ -1,6 +1,6 @@
 """Why NIFT's grasps slip: for bench trials, the 6 lowest-loss final grasps of the imitation (centred,
 as the bench judges them), the grasp judge's verdict on each and how much of the cloud lies between
-the fingers (README, "Where NIFT fails").
+the fingers (docs/additions.md, "Where NIFT fails").
 
 Usage (repo root): .venv/bin/python scripts/diagnose_grasp_slips.py TASK POSE TRIAL... [--camera fused]
 e.g. `bottle arbitrary 0-25` or `mug upright 5 18 19 --camera fused` (~50 s per trial: six judged

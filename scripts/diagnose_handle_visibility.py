@@ -1,5 +1,5 @@
 """How much of a mug's handle each bench trial's cloud shows, and the place success of a method
-against it (README, "Known limits"): from one Kinect the handle is sometimes entirely hidden
+against it (docs/limits.md): from one Kinect the handle is sometimes entirely hidden
 behind the mug, and then no method sees where the peg has to go.
 
 Usage (repo root): .venv/bin/python scripts/diagnose_handle_visibility.py RUN [--method ibs-nif]

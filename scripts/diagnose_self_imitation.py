@@ -1,7 +1,7 @@
 """Self-imitation with three optimiser settings (paper / cosine decay / decay + pruning) on a ray-cast mug demo.
 
 Usage (repo root): .venv/bin/python scripts/diagnose_self_imitation.py WEIGHTS THREADS
-The README figures came from an early checkpoint: runs/nif/best.pt after epoch 1, one thread.
+The figures in docs/ came from an early checkpoint: runs/nif/best.pt after epoch 1, one thread.
 """
 import sys
 import time

@@ -58,13 +58,13 @@ class BenchConfig:
         """The field weights the template rows use (`nif`; unset, the fused fields with fused cameras,
         else None: the shipped ones)."""
         if self.nif is None and self.camera == "fused":
-            return str(FUSED_FIELDS)  # fields trained on what this setting sees (README, "Fused cameras")
+            return str(FUSED_FIELDS)  # fields trained on what this setting sees (docs/benchmark.md)
         return self.nif
 
     @property
     def aligns(self) -> bool:
         """Whether grasps are turned square to the wall between the fingers (`align_grasp`; unset, with
-        fused cameras only: one Kinect's normals at a rim are off the mesh's by a median 2-10 degrees, README)."""
+        fused cameras only: one Kinect's normals at a rim are off the mesh's by a median 2-10 degrees, docs/additions.md)."""
         return self.camera == "fused" if self.align_grasp is None else self.align_grasp
 
     def check(self) -> None:

@@ -31,19 +31,19 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                         "the fields trained on fused clouds, app/nift/weights/fused)")
     p.add_argument("--no-centering", "--no-center-grasp", dest="center_grasp", action="store_false",
                    help="judge the methods' poses as predicted: grasps not centred between the fingers, "
-                        "hangs not centred on the peg (README)")
+                        "hangs not centred on the peg (docs/additions.md)")
     p.add_argument("--align-grasp", action=argparse.BooleanOptionalAction, default=None,
                    help="turn every method's grasp so the fingers close along the normal of the wall between them "
-                        "(default: with --camera fused only; README)")
+                        "(default: with --camera fused only; docs/additions.md)")
     p.add_argument("--no-feasibility", dest="feasible", action="store_false",
                    help="take each template method's lowest-loss poses even where the fingers would close on "
-                        "nothing or the place turns the object over relative to the grasp (README)")
+                        "nothing or the place turns the object over relative to the grasp (docs/additions.md)")
     p.add_argument("--place-contact-scale", type=float, default=ImitationConfig.place_contact_scale,
                    help="metres: weight place template points by exp(-d / scale), d their distance to the rack or "
-                        f"shelf (default {ImitationConfig.place_contact_scale}; 0: the paper's plain mean; README)")
+                        f"shelf (default {ImitationConfig.place_contact_scale}; 0: the paper's plain mean; docs/additions.md)")
     p.add_argument("--place-demo-match", choices=DEMO_MATCHES, default=ImitationConfig.place_demo_match,
                    help="compare a place pose with the demos' mean features (mean, the paper's) or with each demo's "
-                        f"own, taking the nearest (nearest); default {ImitationConfig.place_demo_match} (README)")
+                        f"own, taking the nearest (nearest); default {ImitationConfig.place_demo_match} (docs/additions.md)")
     p.add_argument("--workers", type=int, default=2, help="worker processes (default 2, one per core)")
     p.add_argument("--minutes", type=float,
                    help="stop after this wall time and write the table of the trials done (the same command resumes)")

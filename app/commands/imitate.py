@@ -24,7 +24,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                         "fingers, a hang not centred on the peg")
     p.add_argument("--align-grasp", action="store_true",
                    help="turn the grasp so the fingers close along the normal of the wall between them (for "
-                        "clouds fused from several views; README)")
+                        "clouds fused from several views; docs/additions.md)")
     p.add_argument("--no-feasibility", dest="feasible", action="store_false",
                    help="the lowest-loss poses even if the fingers close on nothing or the place turns the object over")
     p.add_argument("--json", action="store_true", help="print the poses and losses as JSON")

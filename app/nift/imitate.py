@@ -32,7 +32,7 @@ loss is the nearest demo's,
 
     L(T) = min_d  sum_{x in X}  w(x) | f(x | O_d) - f(T x | O_target) |_1
 
-(the mean of ten mugs' fields is no mug's). Measured on the bench: no gain (README, "Nearest demo").
+(the mean of ten mugs' fields is no mug's). Measured on the bench: no gain (docs/additions.md, "Nearest demo").
 
 Optional `feasible` (our addition): a predicate on poses (K, 4, 4) -> (K,) bool from the caller
 (e.g. "the fingers would close on something"); pruning drops infeasible initialisations first (the

@@ -11,9 +11,9 @@ DEMO_MATCHES = ("mean", "nearest")
 class ImitationConfig:
     """Optimiser settings (the paper's: 10 inits, Adam lr 1e-2, at most 500 iterations). We prune
     by default - the paper does not: `nift bench-imitation` measured 4-6x less time at the same
-    pose errors (README); `prune_every=0` is the paper's schedule. 20 inits, not 10: the sharper
+    pose errors (docs/limits.md); `prune_every=0` is the paper's schedule. 20 inits, not 10: the sharper
     GPU-trained NIF has more local minima, and pruning leaves 20 inits still ~3.5x cheaper than
-    the paper's 10 (README, "Imitation")."""
+    the paper's 10 (docs/decisions.md, "Imitation")."""
 
     inits: int = 20
     iterations: int = 500
@@ -29,7 +29,7 @@ class ImitationConfig:
     # distance to the anchor, instead of the paper's plain mean (scale 0). On for place templates:
     # on the rack only ~15 % of the points lie near the peg, and the mug's handle got lost in the mean
     # (first 20 bench trials, mug place 0.30 -> 0.60 upright, 0.25 -> 0.40 arbitrary); off for grasp
-    # templates, where it cost bowl and mug grasps (README, "Contact weighting").
+    # templates, where it cost bowl and mug grasps (docs/additions.md, "Contact weighting").
     grasp_contact_scale: float = 0.0  # metres, for templates of the gripper
     place_contact_scale: float = 0.01  # metres, for templates of a fixture (rack, shelf)
     # Demo matching (our addition): "mean" compares a pose with the demos' mean features (the paper's

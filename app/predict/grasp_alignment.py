@@ -17,7 +17,7 @@ and the gripper turns about its TCP by the smallest rotation taking its closing 
 
 It needs normals that are right: on fused clouds the teacher's own (square) bowl and mug grasps
 turn by a median of 3-7 degrees (at most 18), on one Kinect view's by 2-10 (at most 89), and there
-it lost more grasps than it mended (README, "Grasp alignment"; `scripts/diagnose_grasp_alignment.py`)
+it lost more grasps than it mended (docs/additions.md, "Grasp alignment"; `scripts/diagnose_grasp_alignment.py`)
 - so callers turn it on for fused clouds only.
 """
 from __future__ import annotations
