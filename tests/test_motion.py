@@ -157,3 +157,50 @@ def test_reach_check_passes_a_pose_over_the_table_and_refuses_table_rack_and_far
     rack = CellConfig().fixture_pose("rack")
     assert not reachable(make_pose(down, rack[:3, 3] + [0.0, 0.0, 0.2]))  # the open gripper around the post
     assert not reachable(make_pose(down, [1.5, 0.0, 0.2]))  # beyond the UR5's reach
+
+
+def _pillar_between_two_reaches(kin):
+    """Two top-down reaches 44 cm apart (y = -0.22, 0.22) and a 6 cm pillar, 25 cm tall, between them."""
+    down = kin.fk(HOME_Q)[:3, :3]
+    q0, q1 = (kin.ik(make_pose(down, [0.45, y, 0.15]), HOME_Q) for y in (-0.22, 0.22))
+    grid = np.stack(np.meshgrid(np.linspace(-0.03, 0.03, 4), np.linspace(-0.03, 0.03, 4), np.linspace(0, 0.25, 10)), -1)
+    return q0, q1, grid.reshape(-1, 3) + [0.45, 0.0, 0.0]  # (160, 3)
+
+
+def test_sampling_planner_goes_around_an_obstacle_on_the_direct_path(kin, scene):
+    from app.motion.sampling import SamplingConfig, densify, plan_joint_path
+
+    q0, q1, pillar = _pillar_between_two_reaches(kin)
+    scene.add_cloud("pillar", pillar)
+    try:
+        assert scene.collisions(q0) == [] and scene.collisions(q1) == []
+        assert any(scene.collisions(q) for q in densify(np.array([q0, q1]), 0.01))  # the straight path hits it
+        path = plan_joint_path(scene, q0, q1)
+        assert np.array_equal(path[0], q0) and np.array_equal(path[-1], q1)
+        assert not any(scene.collisions(q) for q in densify(path, 0.005))  # every state, at the scene's margin
+        assert np.array_equal(plan_joint_path(scene, q0, q1), path)  # seeded: the same problem, the same path
+        assert not np.array_equal(plan_joint_path(scene, q0, q1, config=SamplingConfig(seed=2)), path)
+    finally:
+        scene.remove("pillar")
+
+
+def test_transit_around_an_obstacle_is_collision_free_once_timed(kin, limits, scene):
+    from app.motion.executor import Planner
+
+    q0, q1, pillar = _pillar_between_two_reaches(kin)
+    scene.add_cloud("pillar", pillar)
+    try:
+        traj = Planner(kin, limits, scene).transit(q0, q1, "around")
+        assert np.allclose(traj.q[0], q0) and np.allclose(traj.q[-1], q1, atol=1e-6)
+        assert not any(scene.collisions(q) for q in traj.q)  # every 4 ms sample, not just the checked ones
+        assert np.all(np.abs(traj.qd) <= limits.velocity + 1e-6)
+    finally:
+        scene.remove("pillar")
+
+
+def test_upper_arm_below_horizontal_hits_the_table_not_its_own_base(scene):
+    down = HOME_Q.copy()
+    down[1] = 0.6  # upper arm 34 degrees below horizontal: its meshes overlap the base's by 5 mm here
+    hits = scene.collisions(down)
+    assert "upper_arm_link-table" in hits and "base_link-upper_arm_link" not in hits
+    assert all(pair in scene.self_pairs for pair in [("base_link", "forearm_link"), ("shoulder_link", "forearm_link")])

@@ -12,8 +12,8 @@ Plan (all of it before the arm moves, so an unreachable place fails before the p
     clear -> home             joint transit
 
 A two-finger grasp turned half a turn about its approach axis is the same grasp, so both are
-planned and the one with less joint travel is kept. Transits that would collide go through via
-points above their ends, or home.
+planned and the one with less joint travel is kept. A transit whose direct joint motion would
+collide follows a path of OMPL's RRT-Connect (`app.motion.sampling`).
 """
 from __future__ import annotations
 
@@ -24,8 +24,9 @@ import numpy as np
 
 from app.motion.cartesian import line_path
 from app.motion.ik import IKConfig, NoIKSolution, solutions
+from app.motion.sampling import NoPath, SamplingConfig, densify, plan_joint_path
 from app.motion.scene import PlanningScene
-from app.motion.trajectory import JointTrajectory, concatenate, joint_segment, path_timing
+from app.motion.trajectory import JointTrajectory, concatenate, joint_segment, path_timing, through_waypoints
 from hardware.interfaces import Arm, JointLimits
 from hardware.kinematics import UR5Kinematics
 from hardware.robot_description import HOME_Q
@@ -41,7 +42,6 @@ class ExecutorConfig:
 
     approach_distance: float = 0.10  # m, pre-grasp back along the tool's approach (z) axis
     lift_height: float = 0.12  # m, straight up after the grasp
-    via_height: float = 0.15  # m, how far above a transit's end its via points are
     place_distance: float = 0.10  # m, pre-place back along the fixture's approach direction
     retreat_distance: float = 0.10  # m, back along the tool axis after release
     joint_speed: float = 1.05  # rad/s on transits (ur_rtde's moveJ default)
@@ -54,6 +54,7 @@ class ExecutorConfig:
     ik_candidates: int = 4  # IK solutions tried at the grasp and at the place before giving up
     home_q: tuple[float, ...] = tuple(HOME_Q)
     ik: IKConfig = IKConfig()
+    sampling: SamplingConfig = SamplingConfig()
 
 
 class ExecutionError(RuntimeError):
@@ -87,37 +88,27 @@ class Planner:
         self.kin, self.limits, self.scene, self.config = kin, limits, scene, config
 
     def transit(self, q0: np.ndarray, q1: np.ndarray, label: str, ignore: tuple[str, ...] = ()) -> JointTrajectory:
-        """A collision-free chain of Ruckig joint motions q0 -> q1: direct, else through the first
-        via points that work - above the goal, above both ends, or home (no sampling planner)."""
-        first_hits = None
-        for via in self._via_candidates(q0, q1):
-            waypoints = [q0, *via, q1]
-            parts = [joint_segment(a, b, self.limits, self.config.joint_speed, self.config.joint_acceleration)
-                     for a, b in zip(waypoints[:-1], waypoints[1:])]
-            hits = next((h for part in parts if (h := self._collisions(part, ignore))), None)
-            if hits is None:
-                return concatenate(parts, label)
-            first_hits = first_hits or hits
-        raise NoIKSolution(f"{label}: no collision-free joint motion ({', '.join(first_hits[:3])} on the direct one; "
-                           f"via points above the ends and via home collide too)")
+        """A collision-free chain of Ruckig joint motions q0 -> q1: the direct one, else through the
+        waypoints of the sampling planner (`app.motion.sampling`)."""
+        direct = concatenate([joint_segment(q0, q1, self.limits, self.config.joint_speed,
+                                            self.config.joint_acceleration)], label)
+        hits = self._collisions(direct, ignore)
+        if not hits:
+            return direct
+        try:
+            waypoints = plan_joint_path(self.scene, q0, q1, ignore, self.config.sampling)
+        except NoPath as exc:
+            raise NoIKSolution(f"{label}: {exc} (the direct one hits {', '.join(hits[:3])})") from None
+        for path in (waypoints, densify(waypoints, self.config.sampling.max_step / 2)):
+            traj = self._timed(path, label)
+            if not self._collisions(traj, ignore):
+                return traj
+        raise NoIKSolution(f"{label}: the sampled joint path collides once timed ({', '.join(hits[:3])} on the direct one)")
 
-    def _via_candidates(self, q0: np.ndarray, q1: np.ndarray) -> list[list[np.ndarray]]:
-        """[], [above q1], [above q0, above q1], [home] - those whose IK exists."""
-        up0, up1 = self._above(q0), self._above(q1)
-        candidates = [[]]
-        if up1 is not None:
-            candidates.append([up1])
-            if up0 is not None:
-                candidates.append([up0, up1])
-        candidates.append([np.asarray(self.config.home_q)])
-        return candidates
-
-    def _above(self, q: np.ndarray) -> np.ndarray | None:
-        """The configuration with the TCP via_height higher, same orientation, near q (or None)."""
-        T = self.kin.fk(q)
-        T[2, 3] += self.config.via_height
-        q_up = self.kin.ik(T, q)
-        return None if q_up is None or np.abs(q_up - q).max() > 1.5 else q_up
+    def _timed(self, waypoints: np.ndarray, label: str) -> JointTrajectory:
+        """Ruckig rest-to-rest segments through joint waypoints (K, 6)."""
+        return through_waypoints(list(waypoints), self.limits, self.config.joint_speed, self.config.joint_acceleration,
+                                 label)
 
     def line(self, q0: np.ndarray, T1: np.ndarray, label: str, ignore: tuple[str, ...] = ()) -> JointTrajectory:
         """A straight TCP line from FK(q0) to T1, timed under the joint limits."""

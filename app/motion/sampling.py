@@ -1,0 +1,100 @@
+"""Joint-space sampling-based planning: OMPL's RRTConnect against the planning scene.
+
+A transit whose direct joint path collides is planned by RRT-Connect (Kuffner and LaValle 2000) in
+a box of the UR5's joint space around its two ends: every state is checked with
+`PlanningScene.collisions` (robot, gripper, table, fixtures, the observed object's hull and, while
+it is held, the carried object), edges every `resolution` radians. OMPL's path simplifier then
+shortcuts the path. It is returned as waypoints (K, 6); the caller times it and checks the timed
+motion again, where `densify` helps when a timed segment strays from its straight joint line.
+"""
+from __future__ import annotations
+
+import gc
+from dataclasses import dataclass
+
+import numpy as np
+
+from app.motion.scene import PlanningScene
+
+JOINT_BOUND = 2 * np.pi  # rad: every UR5 joint turns +-360 degrees
+
+
+class NoPath(RuntimeError):
+    """The sampling planner found no collision-free path within its time."""
+
+
+@dataclass(frozen=True)
+class SamplingConfig:
+    """How the sampling planner searches."""
+
+    timeout: float = 2.0  # s of planning per transit before giving up
+    margin: float = np.pi  # rad: the search box extends this far beyond both ends, per joint
+    resolution: float = 0.02  # rad of joint motion between checked states on an edge
+    max_step: float = 0.4  # rad: the longest edge RRT-Connect grows at once
+    seed: int = 1  # OMPL's random seed: the same problem gives the same path
+
+
+def _ompl():
+    """OMPL's modules, quiet (its log goes to stdout otherwise)."""
+    from ompl import base as ob
+    from ompl import geometric as og
+    from ompl import util as ou
+
+    ou.setLogLevel(ou.LOG_NONE)
+    return ob, og, ou
+
+
+def plan_joint_path(scene: PlanningScene, q0: np.ndarray, q1: np.ndarray, ignore: tuple[str, ...] = (),
+                    config: SamplingConfig = SamplingConfig()) -> np.ndarray:
+    """Collision-free joint waypoints (K, 6) from q0 to q1, both included, or NoPath."""
+    q0, q1 = np.asarray(q0, float), np.asarray(q1, float)
+    ob, og, ou = _ompl()
+    ou.RNG.setSeed(config.seed)
+    dof = len(q0)
+    space = ob.RealVectorStateSpace(dof)
+    bounds = ob.RealVectorBounds(dof)
+    low = np.maximum(np.minimum(q0, q1) - config.margin, -JOINT_BOUND)  # (6,)
+    high = np.minimum(np.maximum(q0, q1) + config.margin, JOINT_BOUND)
+    for j in range(dof):
+        bounds.setLow(j, float(low[j]))
+        bounds.setHigh(j, float(high[j]))
+    space.setBounds(bounds)
+    setup = og.SimpleSetup(space)
+    setup.setStateValidityChecker(lambda state: not scene.collisions(_array(state, dof), ignore))
+    info = setup.getSpaceInformation()
+    info.setStateValidityCheckingResolution(config.resolution / space.getMaximumExtent())
+    planner = og.RRTConnect(info)
+    planner.setRange(config.max_step)
+    setup.setPlanner(planner)
+    start, goal = space.allocState(), space.allocState()
+    for j in range(dof):
+        start[j], goal[j] = float(q0[j]), float(q1[j])
+    setup.setStartAndGoalStates(start, goal)
+    try:
+        solved = setup.solve(config.timeout) and setup.haveExactSolutionPath()
+        if not solved:
+            raise NoPath(f"no collision-free joint path within {config.timeout:g} s of RRT-Connect")
+        path = setup.getSolutionPath()
+        simplifier = setup.getPathSimplifier()
+        simplifier.reduceVertices(path)  # shortcut between random pairs of vertices
+        simplifier.ropeShortcutPath(path)
+        waypoints = np.array([_array(path.getState(i), dof) for i in range(path.getStateCount())])  # (K, 6)
+    finally:
+        del setup, planner, info, start, goal, space, bounds
+        gc.collect()  # release OMPL's objects now: left to interpreter exit, nanobind reports them as leaks
+    waypoints[0], waypoints[-1] = q0, q1
+    return waypoints
+
+
+def densify(waypoints: np.ndarray, max_step: float) -> np.ndarray:
+    """The same path (K, D) with straight joint-space points inserted so no edge moves a joint more
+    than max_step."""
+    out = [waypoints[0]]
+    for a, b in zip(waypoints[:-1], waypoints[1:]):
+        n = max(1, int(np.ceil(np.abs(b - a).max() / max_step)))
+        out.extend(a + (b - a) * k / n for k in range(1, n + 1))
+    return np.array(out)
+
+
+def _array(state, dof: int) -> np.ndarray:
+    return np.array([state[j] for j in range(dof)])
