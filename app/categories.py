@@ -1,4 +1,7 @@
-"""The object category names, importable without the mesh libraries (the CLI's parser needs them)."""
+"""Names the CLI's parser needs without loading the mesh libraries: object categories, pose settings."""
 
 CATEGORIES: tuple[str, ...] = ("mug", "bowl", "bottle", "vase")
 IN_DOMAIN: tuple[str, ...] = ("mug", "bowl", "bottle")  # vases stay out of training data
+# upright: standing at a random yaw; arbitrary: a Haar-random rotation held in mid-air until grasped
+# (the paper's teleported protocol); resting: dropped from a Haar-random rotation, settled on the table
+POSES: tuple[str, ...] = ("upright", "arbitrary", "resting")

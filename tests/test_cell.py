@@ -102,3 +102,28 @@ def test_mug_dropped_beside_the_rack_falls_to_the_floor(cell):
     verdict = judge_place(cell.world, obj, beside, cell.fixtures["rack"], upright=False)
     cell.world.remove(obj.body)
     assert not verdict.success and "floor" in verdict.reason
+
+
+@pytest.mark.parametrize("category", ["mug", "bowl", "bottle"])
+def test_a_resting_object_settles_on_the_table_as_it_fell(cell, category):
+    from app.objects import generate
+    from app.sim.spawn import sample_pose
+    from hardware.bullet import p
+    from hardware.se3 import rotation_angle
+
+    world = cell.world
+    mesh = generate(category, 100_003)
+    mesh.apply_scale(0.9)
+    T_drop = sample_pose(mesh, "resting", np.random.default_rng(4))  # the draw `spawn` makes first
+    obj = spawn(world, category, 100_003, "resting", scale=0.9, rng=np.random.default_rng(4))
+    try:
+        v, w = p.getBaseVelocity(obj.body, physicsClientId=world.require())
+        assert np.linalg.norm(v) < 0.005 and np.linalg.norm(w) < 0.05  # at rest
+        assert world.in_contact(obj.body, world.table)  # on the table, not held
+        T = world.pose(obj.body)
+        moved = np.linalg.norm(T[:3, 3] - T_drop[:3, 3]) + rotation_angle(T[:3, :3].T @ T_drop[:3, :3])
+        assert moved > 0.01  # it fell and turned: not left where it was let go
+        lowest = (mesh.vertices @ T[:3, :3].T + T[:3, 3])[:, 2].min()
+        assert -0.005 < lowest < 0.005  # its lowest point on the table top
+    finally:
+        world.remove(obj.body)

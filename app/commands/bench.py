@@ -65,7 +65,7 @@ def run(args: argparse.Namespace) -> int:
     from app.bench.report import write_report
     from app.bench.runner import run as run_bench
     from app.predict.methods import ORACLE, check_method
-    from app.sim.spawn import POSES
+    from app.categories import POSES
     from app.tasks.task import task
 
     if args.quick:

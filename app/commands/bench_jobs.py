@@ -4,6 +4,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from app.categories import POSES
 from app.console.options import add_config_argument
 from app.console.output import print_figures
 
@@ -17,7 +18,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--method", default="nift", choices=SIM_METHODS, help="method (teacher: the oracle)")
     p.add_argument("--jobs", type=int, default=20, help="jobs per task (default 20)")
     p.add_argument("--tasks", default="mug,bowl,bottle", help="comma list of tasks")
-    p.add_argument("--pose", default="upright", choices=["upright", "arbitrary"])
+    p.add_argument("--pose", default="upright", choices=POSES, help="how the objects stand (see nift run --help)")
     p.add_argument("--quick", action="store_true", help="two jobs per task (CI size)")
     p.add_argument("--seed", type=int, default=0, help="first job's seed")
     p.add_argument("--calibration", type=Path, default=Path("calibration.json"),

@@ -6,6 +6,7 @@ import argparse
 import json
 from pathlib import Path
 
+from app.categories import POSES
 from app.console.options import add_config_argument, cell_config
 
 NAME = "capture"
@@ -18,7 +19,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--out", type=Path, default=Path("cloud.ply"), help="object cloud, PLY, base frame")
     p.add_argument("--image", type=Path, default=Path("rgb.png"), help="colour image, PNG")
     p.add_argument("--category", default="mug", choices=CATEGORIES)
-    p.add_argument("--pose", default="upright", choices=["upright", "arbitrary"])  # app.sim.spawn.POSES
+    p.add_argument("--pose", default="upright", choices=POSES)
     p.add_argument("--seed", type=int, default=0, help="picks the test instance, its pose and the noise")
     p.add_argument("--calibration", type=Path, default=Path("calibration.json"),
                    help="camera calibration file; if missing, the cell is calibrated first and it is written")

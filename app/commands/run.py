@@ -5,6 +5,7 @@ import argparse
 import json
 from pathlib import Path
 
+from app.categories import POSES
 from app.console.options import add_config_argument
 
 NAME = "run"
@@ -15,8 +16,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     from app.predict.methods import SIM_METHODS
 
     p.add_argument("--task", required=True, choices=["mug", "bowl", "bottle"], help="which task to do")
-    p.add_argument("--pose", default="upright", choices=["upright", "arbitrary"],
-                   help="how the object stands (arbitrary: held in mid-air until grasped)")
+    p.add_argument("--pose", default="upright", choices=POSES,
+                   help="how the object stands (arbitrary: held in mid-air until grasped; resting: dropped onto "
+                        "the table and settled, as it fell)")
     p.add_argument("--seed", type=int, default=0, help="picks the unseen object, its scale and pose (job i: seed + i)")
     p.add_argument("--jobs", type=int, default=1, help="run a series of this many jobs")
     p.add_argument("--method", default="nift", choices=SIM_METHODS,
