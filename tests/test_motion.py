@@ -204,3 +204,28 @@ def test_upper_arm_below_horizontal_hits_the_table_not_its_own_base(scene):
     hits = scene.collisions(down)
     assert "upper_arm_link-table" in hits and "base_link-upper_arm_link" not in hits
     assert all(pair in scene.self_pairs for pair in [("base_link", "forearm_link"), ("shoulder_link", "forearm_link")])
+
+
+def test_a_carried_object_is_planned_around_what_the_empty_gripper_clears(kin, limits, scene):
+    """A 15 cm post under a transit at 27 cm: the gripper passes over it, a 12 cm box held below the
+    TCP would sweep through it - the planner refuses that path and finds one that clears it."""
+    from app.motion.executor import Planner
+    from app.motion.sampling import densify
+
+    down = kin.fk(HOME_Q)[:3, :3]
+    q0, q1 = (kin.ik(make_pose(down, [0.45, y, 0.27]), HOME_Q) for y in (-0.22, 0.22))
+    T_grasp = make_pose(down, [0.30, -0.30, 0.17])
+    box = np.random.default_rng(0).uniform([0.26, -0.34, 0.02], [0.34, -0.26, 0.14], (300, 3))  # under the TCP
+    post = np.stack(np.meshgrid(np.linspace(-0.03, 0.03, 4), np.linspace(-0.03, 0.03, 4), np.linspace(0, 0.15, 8)), -1)
+    scene.add_cloud("post", post.reshape(-1, 3) + [0.45, 0.0, 0.0])
+    scene.add_cloud("object", box)
+    hits = lambda path: {h for q in densify(path, 0.005) for h in scene.collisions(q, ("object",))}  # noqa: E731
+    try:
+        assert hits(np.array([q0, q1])) == set()  # empty-handed, the direct path is free
+        with scene.holding("object", T_grasp):
+            assert hits(np.array([q0, q1])) == {"held-post"}
+            traj = Planner(kin, limits, scene).transit(q0, q1, "carry", ignore=("object",))
+            assert not any(scene.collisions(q, ("object",)) for q in traj.q)
+    finally:
+        scene.remove("post")
+        scene.remove("object")
