@@ -1,5 +1,6 @@
 """Field training data: camera views, labels, determinism, resume, and the make-data/train verbs."""
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -118,3 +119,27 @@ def test_make_data_and_train_verbs_quick(tmp_path, capsys):
     assert json.loads(capsys.readouterr().out)["training"]["epochs"] == 2
     history = json.loads((tmp_path / "run" / "field.json").read_text())["history"]
     assert len(history) == 2 and history[0] == first_history[0]  # the first epoch is the one already trained
+
+
+class _Payload:
+    """What a planted checkpoint would run if it were unpickled unsafely: it touches a file."""
+
+    def __init__(self, marker):
+        self.marker = marker
+
+    def __reduce__(self):
+        return (Path.touch, (self.marker,))
+
+
+def test_resume_refuses_a_checkpoint_that_would_run_code(tmp_path, capsys):
+    import torch
+
+    data, run = tmp_path / "data", tmp_path / "run"
+    assert main(["make-data", "--out", str(data), "--quick", "--workers", "1", "--json"]) == 0
+    run.mkdir()
+    marker = tmp_path / "ran"
+    torch.save({"config": {}, "payload": _Payload(marker)}, run / "last.pt")
+    assert main(["train", "--target", "occ", "--data", str(data), "--out", str(run), "--quick", "--resume", "--json"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "last.pt: not a checkpoint that loads safely" in err and len(err.splitlines()) == 1
+    assert not marker.exists()  # the payload never ran

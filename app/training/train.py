@@ -18,6 +18,7 @@ and decoder and gets a fresh head.
 """
 from __future__ import annotations
 
+import pickle
 import platform
 import time
 from dataclasses import asdict, dataclass, field
@@ -87,7 +88,11 @@ def load_checkpoint(path: Path, model: NeuralField, opt: torch.optim.Optimizer) 
     """Restore model and optimiser from a checkpoint; return the saved loop state."""
     if not path.is_file():
         raise FileNotFoundError(f"no checkpoint to resume at {path}")
-    blob = torch.load(path, map_location=model.device, weights_only=False)
+    try:  # tensors and plain values only: a checkpoint never runs code when it is read
+        blob = torch.load(path, map_location=model.device, weights_only=True)
+    except (pickle.UnpicklingError, RuntimeError, EOFError) as exc:
+        reason = (str(exc).strip().splitlines() or [type(exc).__name__])[0][:120]
+        raise ValueError(f"{path}: not a checkpoint that loads safely ({reason})") from None
     if asdict(FieldConfig(**blob["config"])) != asdict(model.config):  # keys added since take their defaults
         raise ValueError(f"{path} was trained with a different architecture; start a new --out")
     model.load_state_dict(blob["model"])
