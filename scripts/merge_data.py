@@ -12,6 +12,8 @@ import json
 import os
 from pathlib import Path
 
+from app.training.manifest import shard_path
+
 
 def merge(out: Path, sources: list[Path]) -> dict:
     """Link every source's shards into `out` under new numbers; write and return the manifest."""
@@ -23,7 +25,7 @@ def merge(out: Path, sources: list[Path]) -> dict:
         for shard in manifest["shards"]:
             name = f"shard-{len(merged['shards']):05d}.npz"
             if not (out / name).exists():
-                os.link(src / shard["file"], out / name)
+                os.link(shard_path(src, shard["file"]), out / name)
             merged["shards"].append({**shard, "file": name})
     if merged is None:
         raise ValueError("no source directories given")

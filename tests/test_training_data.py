@@ -143,3 +143,16 @@ def test_resume_refuses_a_checkpoint_that_would_run_code(tmp_path, capsys):
     err = capsys.readouterr().err.strip()
     assert "last.pt: not a checkpoint that loads safely" in err and len(err.splitlines()) == 1
     assert not marker.exists()  # the payload never ran
+
+
+def test_a_manifest_cannot_name_a_shard_outside_its_directory(tmp_path):
+    data = tmp_path / "data"
+    make_dataset(TINY, data, workers=1)
+    manifest = json.loads((data / "manifest.json").read_text())
+    outside = tmp_path / "outside.npz"
+    outside.write_bytes((data / manifest["shards"][0]["file"]).read_bytes())  # a valid shard, but elsewhere
+    for name in ("../outside.npz", str(outside)):
+        manifest["shards"][0]["file"] = name
+        (data / "manifest.json").write_text(json.dumps(manifest))
+        with pytest.raises(ValueError, match="lies outside"):
+            FieldData(data)

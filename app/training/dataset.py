@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from app.training.manifest import read_manifest
+from app.training.manifest import read_manifest, shard_path
 
 ARRAYS = ("category", "seed", "queries", "scf", "occ", "sample_instance", "rotation", "scale", "cloud")
 
@@ -30,7 +30,7 @@ class FieldData:
         parts: dict[str, list[np.ndarray]] = {k: [] for k in ARRAYS}
         offset = 0
         for shard in manifest["shards"]:
-            with np.load(path / shard["file"]) as z:
+            with np.load(shard_path(path, shard.get("file") if isinstance(shard, dict) else shard)) as z:
                 for k in ARRAYS:
                     parts[k].append(z[k] + offset if k == "sample_instance" else z[k])
                 offset += len(z["seed"])

@@ -23,3 +23,15 @@ def read_manifest(out: Path) -> dict | None:
     if manifest.get("format") != FORMAT:
         raise ValueError(f"{path}: expected format {FORMAT!r}, found {manifest.get('format')!r}")
     return manifest
+
+
+def shard_path(out: Path, name: object) -> Path:
+    """The file of a shard named in the manifest of `out`, which must lie inside `out` (a manifest
+    naming `../elsewhere.npz` or an absolute path is refused in one line)."""
+    root = Path(out).resolve()
+    if not isinstance(name, str) or not name:
+        raise ValueError(f"{Path(out) / 'manifest.json'}: a shard's file must be a name, got {name!r}")
+    path = (root / name).resolve()
+    if not path.is_relative_to(root):
+        raise ValueError(f"{Path(out) / 'manifest.json'}: shard {name!r} lies outside {out}")
+    return path
