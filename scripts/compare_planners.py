@@ -17,7 +17,7 @@ import time
 
 import numpy as np
 
-from app.motion.sampling import SamplingConfig, densify, plan_joint_path
+from app.motion.sampling import SamplingConfig, densify, plan_joint_path, search_box
 from app.motion.scene import PlanningScene
 from hardware.robot_description import HOME_Q
 from hardware.se3 import make_pose
@@ -73,9 +73,7 @@ def pyroboplan_rrt_connect(scene, q0, q1, timeout, shortcut: bool = True):
     model = pinocchio.Model()
     for j in range(6):  # six revolute joints: pyroboplan samples within the model's limits
         model.addJoint(j, pinocchio.JointModelRZ(), pinocchio.SE3.Identity(), f"j{j}")
-    margin = SamplingConfig().margin
-    model.lowerPositionLimit = np.maximum(np.minimum(q0, q1) - margin, -2 * np.pi)
-    model.upperPositionLimit = np.minimum(np.maximum(q0, q1) + margin, 2 * np.pi)
+    model.lowerPositionLimit, model.upperPositionLimit = search_box(q0, q1, SamplingConfig().margin)  # OMPL's box
     options = rrt.RRTPlannerOptions(max_step_size=SamplingConfig().resolution, max_connection_dist=np.inf,
                                     rrt_connect=True, bidirectional_rrt=True, max_planning_time=timeout,
                                     rng_seed=1, fast_return=True)

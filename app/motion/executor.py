@@ -26,7 +26,7 @@ from app.motion.cartesian import line_path
 from app.motion.ik import IKConfig, NoIKSolution, solutions
 from app.motion.sampling import NoPath, SamplingConfig, densify, plan_joint_path
 from app.motion.scene import PlanningScene
-from app.motion.trajectory import JointTrajectory, concatenate, joint_segment, path_timing, through_waypoints
+from app.motion.trajectory import JointTrajectory, path_timing, through_waypoints
 from hardware.interfaces import Arm, JointLimits
 from hardware.kinematics import UR5Kinematics
 from hardware.robot_description import HOME_Q
@@ -90,8 +90,7 @@ class Planner:
     def transit(self, q0: np.ndarray, q1: np.ndarray, label: str, ignore: tuple[str, ...] = ()) -> JointTrajectory:
         """A collision-free chain of Ruckig joint motions q0 -> q1: the direct one, else through the
         waypoints of the sampling planner (`app.motion.sampling`)."""
-        direct = concatenate([joint_segment(q0, q1, self.limits, self.config.joint_speed,
-                                            self.config.joint_acceleration)], label)
+        direct = self._timed(np.array([q0, q1]), label)
         hits = self._collisions(direct, ignore)
         if not hits:
             return direct

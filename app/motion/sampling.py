@@ -53,8 +53,7 @@ def plan_joint_path(scene: PlanningScene, q0: np.ndarray, q1: np.ndarray, ignore
     dof = len(q0)
     space = ob.RealVectorStateSpace(dof)
     bounds = ob.RealVectorBounds(dof)
-    low = np.maximum(np.minimum(q0, q1) - config.margin, -JOINT_BOUND)  # (6,)
-    high = np.minimum(np.maximum(q0, q1) + config.margin, JOINT_BOUND)
+    low, high = search_box(q0, q1, config.margin)
     for j in range(dof):
         bounds.setLow(j, float(low[j]))
         bounds.setHigh(j, float(high[j]))
@@ -84,6 +83,12 @@ def plan_joint_path(scene: PlanningScene, q0: np.ndarray, q1: np.ndarray, ignore
         gc.collect()  # release OMPL's objects now: left to interpreter exit, nanobind reports them as leaks
     waypoints[0], waypoints[-1] = q0, q1
     return waypoints
+
+
+def search_box(q0: np.ndarray, q1: np.ndarray, margin: float) -> tuple[np.ndarray, np.ndarray]:
+    """(low, high) joint bounds (D,) of the search: `margin` beyond both ends, within the joints' range."""
+    return (np.maximum(np.minimum(q0, q1) - margin, -JOINT_BOUND),
+            np.minimum(np.maximum(q0, q1) + margin, JOINT_BOUND))
 
 
 def densify(waypoints: np.ndarray, max_step: float) -> np.ndarray:

@@ -3,9 +3,10 @@
 Upright: a random yaw and a position in the workspace, resting on the table. Arbitrary: a Haar
 random rotation, lowest point 5 mm above the table, held by a fixed constraint while observed
 (as NDF does) until `release` is called. Resting: a Haar random rotation, dropped from DROP_HEIGHT
-and left to settle, as an object on a real table lies (a mug on its side, a bowl upside down). Scale is uniform. Masses are per category (documented
-below) times scale^3; the collision model is the CoACD decomposition of the unscaled instance,
-scaled by PyBullet (uniform scaling keeps convex parts convex).
+and left to settle, as an object on a real table lies (a mug on its side, a bowl upside down).
+Scale is uniform. Masses are per category (documented below) times scale^3; the collision model is
+the CoACD decomposition of the unscaled instance, scaled by PyBullet (uniform scaling keeps convex
+parts convex).
 """
 from __future__ import annotations
 
