@@ -5,11 +5,12 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from app.jobs import JobConfig
+from app.jobs.job import JobConfig
 from app.motion.scene import PlanningScene
 from app.sim.cell import CellConfig, SimCell
-from app.sim.jobs import JobSpec, run_sim_job
+from app.sim.jobs import JobSpec, SimHooks, run_sim_job, teacher_predictor
 from app.tasks.task import task
+from hardware.se3 import make_pose
 
 
 def _run(config: CellConfig, spec: JobSpec, method: str, record=None):
@@ -42,3 +43,67 @@ def test_teacher_job_succeeds_end_to_end(name, tmp_path):
                                            "carry", "place", "release", "retreat", "verify"]
     assert np.allclose(q, CellConfig().arm.home_q, atol=0.02) and not stopped
     assert (tmp_path / "job.png").stat().st_size > 10_000
+
+
+def _sim(spec: JobSpec, **kwargs):
+    config = CellConfig()
+    with SimCell(config) as cell:
+        scene = PlanningScene(config)
+        try:
+            T_base_cam = np.array(cell.camera.config.T_base_cam)
+            return run_sim_job(cell, scene, T_base_cam, spec, JobConfig(method="teacher"), **kwargs)
+        finally:
+            scene.close()
+
+
+def test_a_job_whose_best_candidate_is_unreachable_takes_the_next_one_and_succeeds():
+    """The best-scored grasp lies under the table top; the job must skip it and use the oracle's."""
+    def predictor_of(cell):
+        def with_a_bad_first(obj):
+            oracle = teacher_predictor(cell, obj, task("bottle"))
+
+            def predict(cloud):
+                pred = oracle(cloud)
+                good = pred.options()[0]
+                bad = replace(good, T_base_tcp=make_pose(good.T_base_tcp[:3, :3], good.T_base_tcp[:3, 3] - [0, 0, 0.30]))
+                pred.candidates = [bad, replace(good, score=0.5, grasp_rank=1)]
+                return pred
+            return predict
+        return with_a_bad_first
+
+    config = CellConfig()
+    with SimCell(config) as cell:
+        scene = PlanningScene(config)
+        try:
+            result = run_sim_job(cell, scene, np.array(cell.camera.config.T_base_cam), JobSpec(task("bottle"), seed=0),
+                                 JobConfig(method="teacher"), predictor_of=predictor_of(cell))
+        finally:
+            scene.close()
+    assert result.success, result.reason
+    first, second = result.candidates
+    assert first["outcome"].endswith("(quick test)") and "grasp" in first["outcome"] and "table" in first["outcome"]
+    assert second["outcome"] == "planned"
+    assert result.candidates[1]["grasp_rank"] == 1 and result.attempts[0]["outcome"] == "held"
+
+
+class MovesTheObjectOnce(SimHooks):
+    """Once the first plan is made, the object is pushed 12 cm aside: the grasp must miss."""
+
+    moved = False
+
+    def keyframe(self, label: str) -> None:
+        super().keyframe(label)
+        if label == "plan" and not self.moved:
+            T = self.cell.world.pose(self.obj.body)
+            T[1, 3] += 0.12
+            self.cell.world.set_pose(self.obj.body, T)
+            self.moved = True
+
+
+def test_a_missed_grasp_is_detected_retried_after_a_second_look_and_recorded():
+    result = _sim(JobSpec(task("bottle"), seed=0), hooks_type=MovesTheObjectOnce)
+    assert result.success, result.reason
+    assert [a["attempt"] for a in result.attempts] == [1, 2]
+    assert "missed" in result.attempts[0]["outcome"] and result.attempts[1]["outcome"] == "held"
+    assert result.attempts[0]["grasp"] != result.attempts[1]["grasp"]  # looked again: the object had moved
+    assert "recover" in result.seconds and result.failed_stage is None

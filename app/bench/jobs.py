@@ -8,7 +8,7 @@ from typing import Callable
 
 import numpy as np
 
-from app.jobs import JobConfig, JobResult
+from app.jobs.job import JobConfig, JobResult
 from app.motion.scene import PlanningScene
 from app.sim.cell import CellConfig, SimCell
 from app.sim.jobs import JobSpec, run_series

@@ -12,7 +12,7 @@ import time
 import numpy as np
 
 from app.bench.protocol import BenchConfig, Trial, trial_cloud
-from app.jobs import JobConfig
+from app.jobs.job import JobConfig
 from app.motion.scene import PlanningScene
 from app.predict.methods import ORACLE
 from app.predict.predict import predict

@@ -36,7 +36,7 @@ def run(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
     from app.console.options import cell_config
-    from app.jobs import JobConfig
+    from app.jobs.job import JobConfig
     from app.motion.scene import PlanningScene
     from app.sim.calibration import ensure_calibration
     from app.sim.cell import SimCell

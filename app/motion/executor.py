@@ -142,11 +142,11 @@ class Planner:
         T_retreat = T_place @ make_pose(t=[0.0, 0.0, -c.retreat_distance])
         # IK at the ends of the lines first: they decide the configuration each line runs in
         approach, lift = self._first(solutions(self.kin, T_grasp, q_start, self.scene, c.ik, (OBJECT,), "grasp"),
-                                     lambda q: (_reverse(self.line(q, T_pre_grasp, "approach", (OBJECT,))),
+                                     lambda q: (reverse(self.line(q, T_pre_grasp, "approach", (OBJECT,))),
                                                 self.line(q, T_lift, "lift", (OBJECT,))))
         to_pre_grasp = self.transit(q_start, approach.q[0], "to pre-grasp")
         place, retreat = self._first(solutions(self.kin, T_place, lift.end, self.scene, c.ik, (OBJECT,), "place"),
-                                     lambda q: (_reverse(self.line(q, T_pre_place, "place", (OBJECT,))),
+                                     lambda q: (reverse(self.line(q, T_pre_place, "place", (OBJECT,))),
                                                 self.line(q, T_retreat, "retreat", (OBJECT,))))
         with self.scene.holding(OBJECT, T_grasp):  # the carried object must clear the cell too
             carry = self.transit(lift.end, place.q[0], "carry", ignore=(OBJECT,))
@@ -175,7 +175,7 @@ class Planner:
         return self.scene.collisions(traj.end, ignore)
 
 
-def _reverse(traj: JointTrajectory) -> JointTrajectory:
+def reverse(traj: JointTrajectory) -> JointTrajectory:
     """The same path run backwards (a rest-to-rest profile is time-symmetric)."""
     return JointTrajectory(traj.times, traj.q[::-1].copy(), -traj.qd[::-1].copy(), traj.label)
 

@@ -66,18 +66,25 @@ def solve(kin: UR5Kinematics, T_base_tcp: np.ndarray, q_current: np.ndarray, sce
 
 def reach_check(kin: UR5Kinematics, scene: PlanningScene, q_current: np.ndarray, ignore: tuple[str, ...] = (),
                 random_seeds: int = 6):
-    """A quick test of TCP poses for ranking candidates, pose (4, 4) -> bool: the open gripper alone
-    hits nothing (`PlanningScene.gripper_collisions`), then some collision-free IK solution from a
-    few seeds (~10 ms a pose). A pose it passes may still fail the full plan (the lines to it)."""
+    """A quick test of TCP poses for ranking candidates, pose (4, 4) -> bool (`reach_failure` is None)."""
+    failure = reach_failure(kin, scene, q_current, ignore, random_seeds)
+    return lambda T_base_tcp: failure(T_base_tcp) is None
+
+
+def reach_failure(kin: UR5Kinematics, scene: PlanningScene, q_current: np.ndarray, ignore: tuple[str, ...] = (),
+                  random_seeds: int = 6):
+    """A quick test of TCP poses, pose (4, 4) -> why the cell cannot put its TCP there, or None: the
+    open gripper alone hits something (`PlanningScene.gripper_collisions`), or no collision-free IK
+    solution from a few seeds (~10 ms a pose). A pose it passes may still fail the full plan (the lines to it)."""
     config = IKConfig(random_seeds=random_seeds)
 
-    def reachable(T_base_tcp: np.ndarray) -> bool:
-        if scene.gripper_collisions(T_base_tcp, ignore):
-            return False
+    def failure(T_base_tcp: np.ndarray, what: str = "pose") -> str | None:
+        if hits := scene.gripper_collisions(T_base_tcp, ignore):
+            return f"the open gripper at the {what} hits {', '.join(hits)}"
         try:
-            solutions(kin, T_base_tcp, q_current, scene, config, ignore)
-        except NoIKSolution:
-            return False
-        return True
+            solutions(kin, T_base_tcp, q_current, scene, config, ignore, what)
+        except NoIKSolution as exc:
+            return str(exc)
+        return None
 
-    return reachable
+    return failure

@@ -25,6 +25,9 @@ every so many steps, down to `keep`; while more than `keep` are alive (explorati
 taken over a fixed random subset of `explore_points` template points, then over all of them
 (refinement). Both cut the work where it was spent: 10 initialisations x 500 points for the first
 steps. Every initialisation's final pose is scored on all points before the best is chosen.
+With `diverse` (the cell's schedule) pruning drops a pose that is the same candidate as a better one
+(`app.nift.candidates.leaders`) before any other, so one pose per basin survives, and the result
+also ranks the distinct poses within a margin of the best (`Imitation.candidates`).
 
 Optional demo matching "nearest" (our addition, off by default; `ImitationConfig.place_demo_match`):
 instead of the demos' mean feature, each pose is compared with every demo's own features and its
@@ -52,7 +55,9 @@ from dataclasses import dataclass
 
 import numpy as np
 import torch
+import torch._dynamo  # noqa: F401 - Adam's constructor imports it on first use (1.9 s here): paid at start-up, not in a job
 
+from app.nift.candidates import HALF_TURN_Z, IDENTITY, candidates, leaders
 from app.nift.field import NeuralField, load_field
 from app.nift.imitation_config import ImitationConfig
 from app.nift.schedule import cosine
@@ -71,9 +76,26 @@ class Imitation:
     iterations: int
     seconds: float
     feasible: np.ndarray | None = None  # (inits,) the caller's predicate at the final poses, if given
+    ranked: np.ndarray | None = None  # (K,) indices of the distinct candidates, best first (`app.nift.candidates`)
+
+    @property
+    def candidates(self) -> np.ndarray:
+        """(K, 4, 4) the distinct candidate poses, best first."""
+        return self.poses[self.ranked if self.ranked is not None else [self.best]]
+
+    @property
+    def candidate_losses(self) -> np.ndarray:
+        """(K,) their losses."""
+        return self.losses[self.ranked if self.ranked is not None else [self.best]]
 
 
 Feasible = Callable[[np.ndarray], np.ndarray]  # poses (K, 4, 4) -> (K,) bool
+
+
+def use_threads(n: int) -> None:
+    """Run torch's CPU work on n intra-op threads (the cell's choice: `app.jobs.job.JobConfig.threads`)."""
+    if torch.get_num_threads() != n:
+        torch.set_num_threads(n)
 
 
 def rotation_from_6d(r6: torch.Tensor) -> torch.Tensor:
@@ -187,9 +209,30 @@ def _poses(r6: torch.Tensor, t: torch.Tensor, c_X: torch.Tensor, c_O: torch.Tens
     return np.stack([make_pose(R[i].double().numpy(), trans[i].double().numpy()) for i in range(len(R))])
 
 
+def _survivors(loss: torch.Tensor, poses: np.ndarray, feasible: Feasible | None, config: ImitationConfig,
+               symmetries: tuple[np.ndarray, ...], n: int) -> torch.Tensor:
+    """Rows (n,) a pruning step keeps, by rank: feasible leaders, then feasible followers (the same
+    candidate as a better pose, `app.nift.candidates`; only with `config.diverse`), then the
+    infeasible ones, each group by loss."""
+    rank = loss.clone()
+    span = float(rank.max() - rank.min()) + 1.0
+    if config.diverse:
+        _, followers = leaders(poses, loss.numpy(), config.candidates, symmetries)
+        rank[torch.as_tensor(followers, dtype=torch.long)] += span
+    if feasible is not None:  # infeasible ones are dropped first, the worst of them first
+        rank[torch.as_tensor(~feasible(poses))] += 2 * span
+    return torch.argsort(rank)[:n]
+
+
+def symmetries_of(template: Template) -> tuple[np.ndarray, ...]:
+    """The anchor's symmetries: a two-finger gripper's half-turn about its approach axis."""
+    return (np.eye(4), HALF_TURN_Z) if template.anchor == "gripper" else IDENTITY
+
+
 def _optimise(template: Template, cloud: np.ndarray, config: ImitationConfig, field: NeuralField,
               start: float, feasible: Feasible | None = None) -> Imitation:
     """The loop of `imitate` (the field's parameters frozen)."""
+    symmetries = symmetries_of(template)
     rng = np.random.default_rng(config.seed)
     X = torch.as_tensor(template.points, dtype=torch.float32)  # (M, 3)
     target, w = targets_and_weights(template, config)  # (D, M, F), (M,) sum 1
@@ -230,11 +273,8 @@ def _optimise(template: Template, cloud: np.ndarray, config: ImitationConfig, fi
         if stale >= config.patience:
             break
         if config.prune_every and iterations % config.prune_every == 0 and len(alive) > config.keep:
-            rank = current.clone()
-            if feasible is not None:  # infeasible ones are dropped first, the worst of them first
-                bad = torch.as_tensor(~feasible(_poses(r6, t, c_X, c_O)))
-                rank[bad] += rank.max() - rank.min() + 1.0  # after every feasible one, still ranked by loss
-            keep = torch.argsort(rank)[:max(config.keep, len(alive) // 2)]
+            keep = _survivors(current, _poses(r6, t, c_X, c_O), feasible, config, symmetries,
+                              max(config.keep, len(alive) // 2))
             final_r6[alive], final_t[alive] = r6.detach(), t.detach()  # the dropped ones keep these
             alive = alive[keep]
             (r6, t), opt = _subset(opt, [r6, t], keep)
@@ -246,6 +286,7 @@ def _optimise(template: Template, cloud: np.ndarray, config: ImitationConfig, fi
         final = losses(final_r6, final_t).numpy().astype(np.float64)  # every init on all points: they compare
     poses = _poses(final_r6, final_t, c_X, c_O)
     ok = feasible(poses) if feasible is not None else None
-    k = int(np.argmin(np.where(ok, final, np.inf))) if ok is not None and ok.any() else int(np.argmin(final))
-    return Imitation(poses[k], poses, final, k, iterations, time.perf_counter() - start, ok)
+    ranked = candidates(poses, final, config.candidates, symmetries, ok)
+    k = int(ranked[0])  # the lowest-loss feasible pose (the lowest-loss one when none is feasible)
+    return Imitation(poses[k], poses, final, k, iterations, time.perf_counter() - start, ok, ranked)
 

@@ -2,7 +2,9 @@
 their defaults when it builds its parser, on every start."""
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+
+from app.nift.candidates import CandidateConfig
 
 DEMO_MATCHES = ("mean", "nearest")
 
@@ -36,6 +38,11 @@ class ImitationConfig:
     # Eq. 5); "nearest" with each demo's own and takes the nearest demo's loss (`app.nift.imitate`).
     grasp_demo_match: str = "mean"
     place_demo_match: str = "mean"
+    # Candidates (our addition, `app.nift.candidates`): the result ranks the distinct poses within a
+    # margin; `diverse` pruning keeps one pose of each basin before a second one of the same - off
+    # here, so the teleported tables stay as measured, on in the cell's schedule (app.jobs.job.JOB_IMITATION).
+    diverse: bool = False
+    candidates: CandidateConfig = field(default_factory=CandidateConfig)
     seed: int = 0
 
     def __post_init__(self) -> None:

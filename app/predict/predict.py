@@ -23,7 +23,7 @@ between them (`app.predict.grasp_alignment`, our addition).
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -34,19 +34,34 @@ from app.nift.field import load_field
 from app.nift.imitate import ImitationConfig, imitate
 from app.nift.template import FEATURES, field_override
 from app.objects import fixture
-from app.predict.feasibility import Reach, all_of, carries_like_demos, grips_something, reaches, reaches_at_place
+from app.predict.candidates import Candidate, ranked_pairs
+from app.predict.feasibility import (
+    Reach,
+    all_of,
+    carries_like_demos,
+    grips_something,
+    reaches,
+    reaches_at_place,
+)
 from app.predict.grasp_alignment import align_grasp
 from app.predict.grasp_centering import center_grasp
 from app.predict.methods import check_method
 from app.predict.peg_centering import center_on_peg
-from app.tasks.library import DEMOS_DIR, STAGES, stage_anchor, task_demos, task_templates
+from app.tasks.library import (
+    DEMOS_DIR,
+    STAGES,
+    stage_anchor,
+    task_demos,
+    task_templates,
+)
 from app.tasks.task import Task
 from hardware.se3 import invert
 
 
 @dataclass
 class Prediction:
-    """What a method predicts for one cloud, with its costs."""
+    """What a method predicts for one cloud, with its costs; `candidates` (template methods) are the
+    grasp and place pairs a cell may execute instead, best first (`app.predict.candidates`)."""
 
     method: str
     T_base_tcp: np.ndarray
@@ -55,18 +70,28 @@ class Prediction:
     losses: dict[str, list[float]] = field(default_factory=dict)
     iterations: dict[str, int] = field(default_factory=dict)
     seconds: dict[str, float] = field(default_factory=dict)
+    candidates: list[Candidate] = field(default_factory=list)
 
     @property
     def T_base_tcp_place(self) -> np.ndarray:
         """The gripper's pose at the place, if the grasp holds the object rigidly."""
         return self.motion @ self.T_base_tcp
 
+    @property
+    def T_base_fixture(self) -> np.ndarray:
+        """The real fixture's pose the motion was computed for (motion = T_base_fixture @ inv(seen))."""
+        return self.motion @ self.T_base_fixture_seen
+
+    def options(self) -> list[Candidate]:
+        """The pairs to try, best first: the candidates, or the single prediction."""
+        return self.candidates or [Candidate(self.T_base_tcp, self.T_base_fixture_seen, self.T_base_fixture)]
+
     def record(self) -> dict:
         """JSON-ready."""
         return {"method": self.method, "T_base_tcp": self.T_base_tcp.round(6).tolist(),
                 "T_base_tcp_place": self.T_base_tcp_place.round(6).tolist(),
                 "motion": self.motion.round(6).tolist(), "losses": self.losses, "iterations": self.iterations,
-                "seconds": self.seconds}
+                "seconds": self.seconds, "candidates": len(self.candidates)}
 
 
 def predict(t: Task, cloud: np.ndarray, method: str = "nift", T_base_fixture: np.ndarray | None = None,
@@ -87,7 +112,15 @@ def predict(t: Task, cloud: np.ndarray, method: str = "nift", T_base_fixture: np
         if not np.array_equal(seen, pred.T_base_fixture_seen):  # unmoved (the shelf): keep the motion bit for bit
             pred.motion = pred.motion @ pred.T_base_fixture_seen @ invert(seen)  # T_base_fixture @ inv(seen)
             pred.T_base_fixture_seen = seen
+    pred.candidates = [refine_candidate(c, t, cloud, center=center, align=align) for c in pred.candidates]
     return pred
+
+
+def refine_candidate(c: Candidate, t: Task, cloud: np.ndarray, *, center: bool, align: bool) -> Candidate:
+    """A candidate pair refined as `predict` refines its best poses."""
+    seen = center_on_peg(c.T_base_fixture_seen, cloud, fixture(t.fixture)) if center else c.T_base_fixture_seen
+    return replace(c, T_base_tcp=refine_grasp(c.T_base_tcp, cloud, center=center, align=align),
+                   T_base_fixture_seen=seen)
 
 
 def refine_grasp(T_base_tcp: np.ndarray, cloud: np.ndarray, *, center: bool, align: bool) -> np.ndarray:
@@ -117,9 +150,9 @@ def _predict(t: Task, cloud: np.ndarray, method: str, T_base_fixture: np.ndarray
     templates = task_templates(t, directory, query, feature, nif=nif, per_demo=nearest)
     field = load_field(field_override(feature, nif) or FEATURES[feature])  # once for both templates
     reach = reachable if feasible else None
-    grasp = imitate(templates["grasp"], cloud, config, field,
-                    all_of(grips_something(cloud), reaches(reach) if reach else None) if feasible else None)
-    carry = None
+    grips = all_of(grips_something(cloud), reaches(reach) if reach else None) if feasible else None
+    grasp = imitate(templates["grasp"], cloud, config, field, grips)
+    carry, carried = None, None
     if feasible:
         carried = [invert(d.place_anchor()) @ d.T_base_tcp for d in task_demos(directory)]  # each demo's T_fixture_tcp
         carry = all_of(carries_like_demos(grasp.T, carried),
@@ -128,7 +161,8 @@ def _predict(t: Task, cloud: np.ndarray, method: str, T_base_fixture: np.ndarray
     return Prediction(method, grasp.T, place.T, T_base_fixture @ invert(place.T),
                       {"grasp": grasp.losses.round(5).tolist(), "place": place.losses.round(5).tolist()},
                       {"grasp": grasp.iterations, "place": place.iterations},
-                      {"grasp": round(grasp.seconds, 3), "place": round(place.seconds, 3)})
+                      {"grasp": round(grasp.seconds, 3), "place": round(place.seconds, 3)},
+                      ranked_pairs(grasp, place, T_base_fixture, carried))
 
 
 def _predict_cpd(method: str, t: Task, cloud: np.ndarray, T_base_fixture: np.ndarray, directory: Path) -> Prediction:

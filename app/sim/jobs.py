@@ -13,7 +13,7 @@ from typing import Callable
 
 import numpy as np
 
-from app.jobs import JobConfig, JobHooks, JobResult, run_job
+from app.jobs.job import JobConfig, JobHooks, JobResult, Predictor, run_job
 from app.motion.scene import PlanningScene
 from app.objects import split
 from app.predict.methods import ORACLE
@@ -75,19 +75,28 @@ def reset_arm(cell: SimCell) -> None:
     cell.gripper.open()
 
 
+def teacher_predictor(cell: SimCell, obj: SpawnedObject, t: Task) -> Predictor:
+    """The oracle's poses for the object where it is when the job asks (after a miss it may have moved)."""
+    T_base_fixture = cell.config.fixture_pose(t.fixture)
+    return lambda cloud: teacher_prediction(t, obj.mesh, obj.scale, cell.world.pose(obj.body), T_base_fixture)
+
+
 def run_sim_job(cell: SimCell, scene: PlanningScene, T_base_cam: np.ndarray, spec: JobSpec,
-                config: JobConfig = JobConfig(), record: Path | None = None) -> JobResult:
-    """Spawn the spec's object, run the job, remove the object; the strip goes to `record`."""
+                config: JobConfig = JobConfig(), record: Path | None = None, hooks_type: type[SimHooks] = SimHooks,
+                predictor_of: Callable[[SpawnedObject], Predictor] | None = None) -> JobResult:
+    """Spawn the spec's object, run the job, remove the object; the strip goes to `record`
+    (`hooks_type`, `predictor_of(object)`: other simulator hooks and poses, for tests)."""
     reset_arm(cell)
     obj = spawn_test_object(cell.world, spec.task, spec.pose, np.random.default_rng(spec.seed))
-    hooks = SimHooks(cell, obj, spec.task, record is not None)
+    hooks = hooks_type(cell, obj, spec.task, record is not None)
     try:
         hooks.keyframe("start")
         T_base_fixture = cell.config.fixture_pose(spec.task.fixture)
         predictor = None
-        if config.method == ORACLE:
-            T_base_obj = cell.world.pose(obj.body)
-            predictor = lambda cloud: teacher_prediction(spec.task, obj.mesh, obj.scale, T_base_obj, T_base_fixture)  # noqa: E731
+        if predictor_of is not None:
+            predictor = predictor_of(obj)
+        elif config.method == ORACLE:
+            predictor = teacher_predictor(cell, obj, spec.task)
         result = run_job(spec.task, cell.arm, cell.gripper, cell.camera, T_base_cam, T_base_fixture, scene, config,
                          hooks, predictor)
         if not result.success:

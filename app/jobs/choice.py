@@ -1,0 +1,87 @@
+"""Choose what the cell can do: the first grasp and place pair, in the order of the template loss,
+that the cell can plan (our addition; `app.predict.candidates` ranks the pairs).
+
+Cheap tests first, the full plan last: a pair is planned only when the quick reach test
+(`app.motion.ik.reach_failure`: the open gripper hits nothing and some collision-free IK exists,
+~10 ms) passes at its grasp and at its place, for one of the grasp's two half-turns. Results of
+the quick test are cached per pose, as many pairs share a grasp. At most `most_plans` full plans
+are tried (each is 0.2-3 s); the first that succeeds is returned.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from collections.abc import Callable
+
+import numpy as np
+
+from app.motion.executor import HALF_TURN, PickPlacePlan, Planner
+from app.motion.ik import NoIKSolution
+from app.predict.candidates import Candidate
+from hardware.se3 import pose_to_ur
+
+Failure = Callable[[np.ndarray, str], "str | None"]  # TCP pose (4, 4), what it is -> why not, or None
+
+
+class NoCandidate(NoIKSolution):
+    """No candidate pair could be planned; `tried` says what happened to each."""
+
+    def __init__(self, message: str, tried: list[dict]) -> None:
+        super().__init__(message)
+        self.tried = tried
+
+
+@dataclass
+class Choice:
+    """The plan of the chosen pair, and what happened to every pair looked at."""
+
+    plan: PickPlacePlan
+    candidate: Candidate
+    tried: list[dict] = field(default_factory=list)
+
+
+def describe(c: Candidate, outcome: str) -> dict:
+    """A JSON-ready line of the job record for one pair."""
+    return {"score": round(c.score, 4), "grasp_rank": c.grasp_rank, "place_rank": c.place_rank,
+            "grasp": np.round(pose_to_ur(c.T_base_tcp), 5).tolist(),
+            "place": np.round(pose_to_ur(c.T_base_tcp_place), 5).tolist(), "outcome": outcome}
+
+
+class _Cached:
+    """failure(T, what), else failure(T @ half-turn, what): None when either half-turn passes; remembered per pose."""
+
+    def __init__(self, failure: Failure) -> None:
+        self.failure, self.seen = failure, {}
+
+    def __call__(self, T: np.ndarray, what: str) -> str | None:
+        key = np.round(T, 6).tobytes()
+        if key not in self.seen:
+            why = self.failure(T, what)
+            self.seen[key] = None if why is None or self.failure(T @ HALF_TURN, what) is None else why
+        return self.seen[key]
+
+
+def choose(planner: Planner, candidates: list[Candidate], q_start: np.ndarray, place_direction: np.ndarray,
+           failure: Failure, most_plans: int = 6) -> Choice:
+    """Plan the first pair that passes the quick test at its grasp and its place and the full plan;
+    NoCandidate with the best pair's reason and the count of pairs tried when none does."""
+    quick = _Cached(failure)
+    tried: list[dict] = []
+    plans = 0
+    for c in candidates:
+        why = quick(c.T_base_tcp, "grasp") or quick(c.T_base_tcp_place, "place")
+        if why:
+            tried.append(describe(c, f"{why} (quick test)"))
+            continue
+        plans += 1
+        try:
+            plan = planner.pick_place(q_start, c.T_base_tcp, c.T_base_tcp_place, place_direction)
+        except NoIKSolution as exc:
+            tried.append(describe(c, str(exc)))
+            if plans >= most_plans:
+                break
+            continue
+        tried.append(describe(c, "planned"))
+        return Choice(plan, c, tried)
+    if not tried:
+        raise NoCandidate("no grasp like the demos' was found on this cloud (no candidate)", tried)
+    raise NoCandidate(f"none of {len(tried)} candidates could be planned; the best: {tried[0]['outcome']}", tried)

@@ -1,0 +1,315 @@
+"""A pick-and-place job: capture -> perceive -> imitate -> plan -> approach -> grasp -> lift ->
+carry -> place -> release -> retreat -> verify, through the device interfaces.
+
+Every stage is timed; the first one that fails ends the job with its name and a one-line reason,
+and the arm is then stopped (stopJ) with the gripper opened. What only a particular cell can do
+(the simulator releasing an object it held in mid-air once the fingers close, checking where the
+object came to rest, taking key-frame pictures) comes in through `JobHooks`.
+
+Our additions, as a person at the cell would work:
+- the plan takes the first grasp and place pair, in the order of the template loss, that the cell
+  can execute (`app.jobs.choice`), not the single lowest-loss pose;
+- the hold is checked after closing and after the lift (the gripper's width and object_detected);
+  on a miss the gripper opens, backs off along the approach, the arm goes home, the camera looks
+  again and the next candidate with another grasp is tried (re-imitated when the object moved),
+  up to `JobConfig.attempts` grasps. Every attempt goes in the record.
+"""
+from __future__ import annotations
+
+import time
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+from app.jobs.choice import NoCandidate, choose, describe
+from app.motion.executor import (
+    OBJECT,
+    ExecutionError,
+    ExecutorConfig,
+    Planner,
+    execute,
+    reverse,
+)
+from app.motion.ik import NoIKSolution, reach_failure
+from app.motion.scene import PlanningScene
+from app.nift.candidates import CandidateConfig
+from app.nift.imitate import ImitationConfig, use_threads
+from app.perception import PerceptionConfig, object_cloud
+from app.predict.predict import Prediction, predict
+from app.tasks.task import Task
+from hardware.interfaces import Arm, DepthCamera, Gripper
+from hardware.kinematics import UR5Kinematics
+from hardware.se3 import pose_to_ur, ur_to_pose
+
+Predictor = Callable[[np.ndarray], Prediction]  # object cloud (N, 3), base frame -> grasp and place
+STAGES = ("capture", "perceive", "imitate", "plan", "approach", "grasp", "lift", "recover", "carry", "place",
+          "release", "retreat", "verify")
+# The cell's imitation schedule: prune every 10 steps, explore on 128 points, stop after 25 steps
+# without gain, decay over 200 steps, refine 4 poses and keep one per basin (docs/jobs.md, "Imitation time").
+JOB_IMITATION = ImitationConfig(prune_every=10, explore_points=128, patience=25, iterations=200, keep=4,
+                               diverse=True, candidates=CandidateConfig(margin=0.3, most=8))
+MOVED = 0.01  # m: a cloud whose centroid moved more than this since the last look is imitated again
+
+
+@dataclass(frozen=True)
+class JobConfig:
+    """How a job runs: the method, the grip, and the settings of perception, imitation and motion."""
+
+    method: str = "nift"
+    grasp_force: float = 40.0  # N
+    release_clearance: float = 0.02  # m the fingers open beyond the held width to let go: opening fully
+    # inside a bowl swept the far finger into its wall and dragged it off the shelf on the retreat
+    demos: Path | None = None  # task directory (default demos/<task>)
+    center_grasp: bool = True  # centre the grasp between the fingers and a hang on the peg (app.predict.grasp_centering, app.predict.peg_centering)
+    align_grasp: bool = False  # turn the grasp square to the wall between the fingers (app.predict.grasp_alignment): off, as
+    # one Kinect's normals at a rim are too far off (docs/additions.md, "Grasp alignment")
+    feasible: bool = True  # prefer grasps that close on something and places the grasp can carry to
+    # (app.predict.feasibility); what the cell can reach is chosen among the candidates (app.jobs.choice)
+    attempts: int = 3  # grasps tried before the job gives up
+    most_plans: int = 6  # full plans tried per attempt before the plan stage gives up
+    threads: int = 1  # torch threads: two threads beside one busy process took 2.5x as long as one (docs/jobs.md)
+    perception: PerceptionConfig = PerceptionConfig()
+    imitation: ImitationConfig = JOB_IMITATION
+    executor: ExecutorConfig = ExecutorConfig()
+
+    def __post_init__(self) -> None:
+        for name in ("attempts", "most_plans", "threads"):
+            if not isinstance(getattr(self, name), int) or getattr(self, name) < 1:
+                raise ValueError(f"job setting {name} must be an integer >= 1, got {getattr(self, name)!r}")
+
+
+class JobHooks:
+    """Cell-specific steps of a job; this default does nothing and cannot verify the outcome."""
+
+    def on_grasped(self) -> None:
+        """The fingers have closed on the object."""
+
+    def keyframe(self, label: str) -> None:
+        """A stage has finished (take a picture, log, ...)."""
+
+    def verify(self) -> tuple[bool, str]:
+        """(success, why) once the object has been let go on the fixture."""
+        return True, "not verified (this cell has no check of the final object pose)"
+
+
+class JobFailed(RuntimeError):
+    """A stage could not do its part."""
+
+
+class GraspMissed(JobFailed):
+    """The gripper holds nothing after closing or after the lift."""
+
+
+@dataclass
+class JobResult:
+    """What happened: success, the failing stage and why, timings, poses, the plan's figures, and
+    every candidate pair looked at and every grasp attempted."""
+
+    task: str
+    method: str
+    success: bool = False
+    failed_stage: str | None = None
+    reason: str = ""
+    seconds: dict[str, float] = field(default_factory=dict)  # wall time per stage, summed over attempts
+    poses: dict[str, list[float]] = field(default_factory=dict)  # UR poses [x y z rx ry rz], base frame
+    plan: dict[str, float] = field(default_factory=dict)
+    arm: str = ""  # the arm's state at the end
+    candidates: list[dict] = field(default_factory=list)  # every pair the plan stage looked at (`choice.describe`)
+    attempts: list[dict] = field(default_factory=list)  # one per grasp: its candidate and the outcome
+    info: dict = field(default_factory=dict)  # the cell's own facts (object, seed, ...)
+
+    def record(self) -> dict:
+        """JSON-ready."""
+        return {"task": self.task, "method": self.method, "success": self.success, "failed_stage": self.failed_stage,
+                "reason": self.reason, "seconds": self.seconds, "total_seconds": round(sum(self.seconds.values()), 3),
+                "poses": self.poses, "plan": self.plan, "arm": self.arm, "candidates": self.candidates,
+                "attempts": self.attempts, **self.info}
+
+
+@contextmanager
+def _stage(result: JobResult, name: str, hooks: JobHooks):
+    """Time a stage (summed over attempts); turn its expected errors into JobFailed(stage)."""
+    start = time.perf_counter()
+    try:
+        yield
+    except (JobFailed, NoIKSolution, ExecutionError, ValueError, FileNotFoundError) as exc:
+        result.failed_stage = name
+        if isinstance(exc, JobFailed):
+            raise
+        raise JobFailed(str(exc)) from exc
+    finally:
+        result.seconds[name] = round(result.seconds.get(name, 0.0) + time.perf_counter() - start, 3)
+    hooks.keyframe(name)
+
+
+def run_job(t: Task, arm: Arm, gripper: Gripper, camera: DepthCamera, T_base_cam: np.ndarray,
+            T_base_fixture: np.ndarray, scene: PlanningScene, config: JobConfig = JobConfig(),
+            hooks: JobHooks | None = None, predictor: Predictor | None = None) -> JobResult:
+    """Run one pick-and-place job of task t; never raises for a failed stage - it is in the result.
+
+    `predictor(cloud)` gives the grasp and place; by default the configured method on the task's demos."""
+    hooks = hooks or JobHooks()
+    result = JobResult(t.name, config.method)
+    use_threads(config.threads)
+    kin = UR5Kinematics(tcp_offset=ur_to_pose(arm.getTCPOffset()))
+    if predictor is None:
+        def predictor(cloud: np.ndarray) -> Prediction:
+            return predict(t, cloud, config.method, T_base_fixture, config.demos, config.imitation,
+                           center=config.center_grasp, feasible=config.feasible, align=config.align_grasp)
+    try:
+        _run(_Job(t, arm, gripper, camera, T_base_cam, T_base_fixture, scene, kin, config, hooks, predictor, result))
+        result.arm = "home"
+    except JobFailed as exc:
+        result.reason = str(exc)
+        result.arm = _make_safe(arm, gripper)
+    finally:
+        scene.remove(OBJECT)
+    return result
+
+
+@dataclass
+class _Job:
+    """One job's devices, settings and record, passed between its steps."""
+
+    t: Task
+    arm: Arm
+    gripper: Gripper
+    camera: DepthCamera
+    T_base_cam: np.ndarray
+    T_base_fixture: np.ndarray
+    scene: PlanningScene
+    kin: UR5Kinematics
+    config: JobConfig
+    hooks: JobHooks
+    predictor: Predictor
+    result: JobResult
+
+    def stage(self, name: str):
+        return _stage(self.result, name, self.hooks)
+
+
+def _run(job: _Job) -> None:
+    planner = Planner(job.kin, job.arm.joint_limits, job.scene, job.config.executor)
+    options, seen = None, None
+    for attempt in range(1, job.config.attempts + 1):
+        cloud = _observe(job)
+        if options is None or np.linalg.norm(cloud.mean(axis=0) - seen) > MOVED:
+            options = _imitate(job, cloud)
+        seen = cloud.mean(axis=0)
+        plan, chosen = _plan(job, planner, options)
+        try:
+            _pick(job, plan)
+        except GraspMissed as miss:
+            job.result.attempts.append({"attempt": attempt, **describe(chosen, str(miss))})
+            if attempt == job.config.attempts:
+                raise JobFailed(f"{miss} (attempt {attempt} of {attempt})") from None
+            _recover(job, planner, plan)
+            options = [c for c in options if c.grasp_rank != chosen.grasp_rank]
+            continue
+        job.result.attempts.append({"attempt": attempt, **describe(chosen, "held")})
+        job.result.failed_stage = None
+        break
+    _place(job, plan)
+
+
+def _observe(job: _Job) -> np.ndarray:
+    """Capture and perceive: the object's cloud (N, 3), added to the planning scene."""
+    with job.stage("capture"):
+        frame = job.camera.capture()
+    with job.stage("perceive"):
+        cloud = object_cloud(frame, job.T_base_cam, job.config.perception)
+        job.scene.add_cloud(OBJECT, cloud, eye=job.T_base_cam[:3, 3])
+    return cloud
+
+
+def _imitate(job: _Job, cloud: np.ndarray) -> list:
+    """The predictor's candidate pairs, best first; the best one's poses go in the record at once."""
+    with job.stage("imitate"):
+        pred = job.predictor(cloud)
+    job.result.poses = {"grasp": _ur(pred.T_base_tcp), "place": _ur(pred.T_base_tcp_place)}
+    return pred.options()
+
+
+def _plan(job: _Job, planner: Planner, options: list):
+    """The first pair the cell can plan (`app.jobs.choice.choose`), its poses and figures recorded."""
+    with job.stage("plan"):
+        q = job.arm.getActualQ()
+        failure = reach_failure(job.kin, job.scene, q, ignore=(OBJECT,))
+        try:
+            choice = choose(planner, options, q, job.t.place_direction(job.T_base_fixture), failure,
+                            job.config.most_plans)
+        except NoCandidate as exc:
+            job.result.candidates += exc.tried
+            raise
+        job.result.candidates += choice.tried
+        plan = choice.plan
+        job.result.poses = {"grasp": _ur(plan.T_base_grasp), "place": _ur(plan.T_base_place)}
+        job.result.plan = {"planning_seconds": round(plan.seconds, 3), "trajectory_seconds": round(plan.duration, 2),
+                           "joint_travel_rad": round(plan.travel, 2), "candidates_tried": len(choice.tried)}
+    return plan, choice.candidate
+
+
+def _pick(job: _Job, plan) -> None:
+    """Approach, close, lift; GraspMissed when nothing is held after closing or after the lift."""
+    tolerance = job.config.executor.end_tolerance
+    with job.stage("approach"):
+        job.gripper.open()
+        execute(job.arm, plan.segment("to pre-grasp"), tolerance)
+        execute(job.arm, plan.segment("approach"), tolerance)
+    with job.stage("grasp"):
+        if not job.gripper.close(job.config.grasp_force):
+            raise GraspMissed("grasp missed: the gripper closed on nothing")
+        job.hooks.on_grasped()
+    with job.stage("lift"):
+        execute(job.arm, plan.segment("lift"), tolerance)
+        if not job.gripper.object_detected:
+            raise GraspMissed(f"object dropped during the lift (gripper width {1000 * job.gripper.width:.1f} mm)")
+
+
+def _recover(job: _Job, planner: Planner, plan) -> None:
+    """After a miss: open, back off along the approach (when still at the grasp), go home."""
+    tolerance = job.config.executor.end_tolerance
+    with job.stage("recover"):
+        job.gripper.open()
+        q = job.arm.getActualQ()
+        if np.abs(q - plan.segment("lift").q[0]).max() < tolerance:
+            execute(job.arm, reverse(plan.segment("approach")), tolerance)
+        job.scene.remove(OBJECT)  # it may have moved; the next look adds it again
+        home = np.asarray(job.config.executor.home_q)
+        execute(job.arm, planner.transit(job.arm.getActualQ(), home, "recover"), tolerance)
+
+
+def _place(job: _Job, plan) -> None:
+    """Carry, place, release, retreat, verify."""
+    tolerance = job.config.executor.end_tolerance
+    with job.stage("carry"):
+        execute(job.arm, plan.segment("carry"), tolerance)
+        if not job.gripper.object_detected:
+            raise JobFailed(f"object dropped during the carry (gripper width {1000 * job.gripper.width:.1f} mm)")
+    with job.stage("place"):
+        execute(job.arm, plan.segment("place"), tolerance)
+    with job.stage("release"):
+        job.gripper.open(width=min(job.gripper.stroke, job.gripper.width + job.config.release_clearance))
+    with job.stage("retreat"):
+        for name in ("retreat", "clear", "home"):
+            execute(job.arm, plan.segment(name), tolerance)
+    with job.stage("verify"):
+        ok, why = job.hooks.verify()
+        if not ok:
+            raise JobFailed(f"place failed: {why}")
+        job.result.success, job.result.reason = True, why
+
+
+def _make_safe(arm: Arm, gripper: Gripper) -> str:
+    """After a failure: stop the joints, open the gripper; say what state the arm is left in."""
+    arm.stopJ()
+    gripper.open()
+    q = np.round(arm.getActualQ(), 3).tolist()
+    return f"protective stop at q={q}" if arm.isProtectiveStopped() else f"stopped at q={q}, gripper open"
+
+
+def _ur(T: np.ndarray) -> list[float]:
+    return np.round(pose_to_ur(T), 5).tolist()
