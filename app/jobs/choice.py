@@ -9,8 +9,8 @@ are tried (each is 0.2-3 s); the first that succeeds is returned.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
 from collections.abc import Callable
+from dataclasses import dataclass, field
 
 import numpy as np
 
