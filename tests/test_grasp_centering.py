@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from app.predict.grasp_centering import MIN_POINTS, center_grasp, swept_points
+from app.predict.grasp_centering import MIN_POINTS, center_grasp, held_width, swept_points
 from hardware.gripper_geometry import GripperGeometry
 from hardware.se3 import make_pose, random_rotations, transform_points
 
@@ -63,3 +63,13 @@ def test_a_bowl_grasp_8mm_off_the_wall_fails_and_centred_holds(teacher_grasp_ver
     as_is, centred = teacher_grasp_verdicts("bowl", off, [lambda T, cloud: T, center_grasp])
     assert not as_is.success, as_is.reason
     assert centred.success, centred.reason
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_the_held_width_is_the_walls_thickness_plus_the_margin_and_the_stroke_without_points(seed):
+    T = _pose(seed)
+    wall = _slab(0.006, 0.010, seed=seed)  # 4 mm thick
+    width = held_width(T, transform_points(T, wall), margin=0.015)
+    assert abs(width - (np.ptp(wall[:, 1]) + 0.015)) < 1e-12 and 0.018 < width <= 0.019
+    assert held_width(T, transform_points(T, _slab(-0.04, 0.04, n=400))) == GripperGeometry().stroke  # clipped
+    assert held_width(T, transform_points(T, wall[: MIN_POINTS - 1])) == GripperGeometry().stroke

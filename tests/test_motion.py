@@ -229,3 +229,21 @@ def test_a_carried_object_is_planned_around_what_the_empty_gripper_clears(kin, l
     finally:
         scene.remove("post")
         scene.remove("object")
+
+
+def test_fingers_closed_on_a_held_object_clear_what_the_open_ones_hit(kin, scene):
+    """A 1 cm post 4.8 cm beside the TCP, along the closing axis: inside the open finger (inner face
+    at 4.25 cm, outer at 5.45 cm), 2.6 cm clear of one closed to 2 cm - for the gripper alone and on the arm."""
+    down = rotvec_to_matrix([np.pi, 0, 0])
+    T = make_pose(down, [0.5, 0.0, 0.15])
+    post = T[:3, 3] + 0.048 * T[:3, 1] + np.stack(np.meshgrid(*[np.linspace(-0.005, 0.005, 3)] * 3), -1).reshape(-1, 3)
+    scene.add_cloud("post", post)
+    try:
+        q = kin.ik(T, HOME_Q)
+        assert scene.gripper_collisions(T) == ["post"]
+        assert any(hit.startswith("finger_") and hit.endswith("-post") for hit in scene.collisions(q))
+        with scene.fingers(0.02):
+            assert scene.gripper_collisions(T) == [] and not any(hit.endswith("-post") for hit in scene.collisions(q))
+        assert scene.gripper_collisions(T) == ["post"]  # open again after the block
+    finally:
+        scene.remove("post")

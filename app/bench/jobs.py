@@ -8,6 +8,7 @@ from typing import Callable
 
 import numpy as np
 
+from app.io_utils import write_json
 from app.jobs.job import JobConfig, JobResult
 from app.motion.scene import PlanningScene
 from app.sim.cell import CellConfig, SimCell
@@ -25,6 +26,7 @@ def summarise(name: str, results: list[JobResult]) -> dict:
         f"{name}_success_rate": round(float(np.mean([r.success for r in results])), 3),
         f"{name}_median_job_seconds": round(float(np.median(wall)), 2),
         f"{name}_median_imitate_seconds": round(float(np.median([r.seconds.get("imitate", 0.0) for r in results])), 2),
+        f"{name}_mean_attempts": round(float(np.mean([max(1, len(r.attempts)) for r in results])), 2),
     }
     if planned:
         out[f"{name}_median_planning_seconds"] = round(float(np.median([r.plan["planning_seconds"] for r in planned])), 3)
@@ -35,12 +37,15 @@ def summarise(name: str, results: list[JobResult]) -> dict:
 
 def run_jobs_benchmark(jobs: int = 20, method: str = "nift", pose: str = "upright", seed: int = 0,
                        tasks: tuple[str, ...] = ("mug", "bowl", "bottle"), cell_config: CellConfig = CellConfig(),
-                       calibration: Path | None = None, progress: Callable[[JobResult], None] = lambda r: None) -> dict:
+                       calibration: Path | None = None, progress: Callable[[JobResult], None] = lambda r: None,
+                       records: Path | None = None) -> dict:
     """Run `jobs` jobs per task (seeds seed .. seed + jobs - 1) and summarise them; the camera pose
-    comes from the `calibration` file (calibrating first if it is missing), or is the true one."""
+    comes from the `calibration` file (calibrating first if it is missing), or is the true one;
+    `records`: every job's record, as a JSON list, written there (atomically) at the end."""
     from app.sim.calibration import ensure_calibration
 
     figures: dict = {"method": method, "pose": pose, "jobs_per_task": jobs}
+    every: list[dict] = []
     with SimCell(cell_config) as cell:
         T_cam = np.array(cell.camera.config.T_base_cam) if calibration is None else ensure_calibration(cell, calibration)
         scene = PlanningScene(cell_config)
@@ -49,6 +54,9 @@ def run_jobs_benchmark(jobs: int = 20, method: str = "nift", pose: str = "uprigh
                 specs = [JobSpec(task(name), seed + i, pose) for i in range(jobs)]
                 results = run_series(cell, scene, T_cam, specs, JobConfig(method=method), progress)
                 figures.update(summarise(name, results))
+                every += [r.record() for r in results]
         finally:
             scene.close()
+    if records is not None:
+        write_json(records, every)
     return figures

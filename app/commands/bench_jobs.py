@@ -24,6 +24,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--calibration", type=Path, default=Path("calibration.json"),
                    help="camera calibration file; if missing, the cell is calibrated first and it is written")
     p.add_argument("--json", action="store_true", help="print the figures as JSON")
+    p.add_argument("--records", type=Path, default=None, help="also write every job's record (a JSON list) to this file")
     add_config_argument(p)
 
 
@@ -40,6 +41,6 @@ def run(args: argparse.Namespace) -> int:
         raise ValueError(f"--jobs must be at least 1, got {jobs}")
     with tqdm(total=jobs * len(tasks), unit="job", desc="bench-jobs") as bar:
         figures = run_jobs_benchmark(jobs, args.method, args.pose, args.seed, tasks, cell_config(args), args.calibration,
-                                     lambda r: bar.update(1))
+                                     lambda r: bar.update(1), args.records)
     print_figures(figures, args.json)
     return 0

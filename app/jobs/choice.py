@@ -20,6 +20,7 @@ from app.predict.candidates import Candidate
 from hardware.se3 import pose_to_ur
 
 Failure = Callable[[np.ndarray, str], "str | None"]  # TCP pose (4, 4), what it is -> why not, or None
+Widths = Callable[[np.ndarray], tuple[float, float]]  # grasp (4, 4) -> fingers' opening (m) holding, let go
 
 
 class NoCandidate(NoIKSolution):
@@ -52,8 +53,8 @@ class _Cached:
     def __init__(self, failure: Failure) -> None:
         self.failure, self.seen = failure, {}
 
-    def __call__(self, T: np.ndarray, what: str) -> str | None:
-        key = np.round(T, 6).tobytes()
+    def __call__(self, T: np.ndarray, what: str, width: float | None = None) -> str | None:
+        key = (np.round(T, 6).tobytes(), width)
         if key not in self.seen:
             why = self.failure(T, what)
             self.seen[key] = None if why is None or self.failure(T @ HALF_TURN, what) is None else why
@@ -61,20 +62,26 @@ class _Cached:
 
 
 def choose(planner: Planner, candidates: list[Candidate], q_start: np.ndarray, place_direction: np.ndarray,
-           failure: Failure, most_plans: int = 6) -> Choice:
+           failure: Failure, most_plans: int = 6, widths: Widths | None = None) -> Choice:
     """Plan the first pair that passes the quick test at its grasp and its place and the full plan;
-    NoCandidate with the best pair's reason and the count of pairs tried when none does."""
+    NoCandidate with the best pair's reason and the count of pairs tried when none does. `widths(T_grasp)`:
+    the fingers' opening while holding and once let go, for the place's tests (fully open if not given)."""
     quick = _Cached(failure)
     tried: list[dict] = []
     plans = 0
     for c in candidates:
-        why = quick(c.T_base_tcp, "grasp") or quick(c.T_base_tcp_place, "place")
+        held, released = widths(c.T_base_tcp) if widths else (None, None)
+        why = quick(c.T_base_tcp, "grasp")
+        if not why:
+            with planner.scene.fingers(held if held is not None else planner.scene.geometry.stroke):
+                why = quick(c.T_base_tcp_place, "place", held)
         if why:
             tried.append(describe(c, f"{why} (quick test)"))
             continue
         plans += 1
         try:
-            plan = planner.pick_place(q_start, c.T_base_tcp, c.T_base_tcp_place, place_direction)
+            plan = planner.pick_place(q_start, c.T_base_tcp, c.T_base_tcp_place, place_direction,
+                                      (held, released) if widths else None)
         except NoIKSolution as exc:
             tried.append(describe(c, str(exc)))
             if plans >= most_plans:

@@ -38,6 +38,7 @@ from app.motion.scene import PlanningScene
 from app.nift.candidates import CandidateConfig
 from app.nift.imitate import ImitationConfig, use_threads
 from app.perception import PerceptionConfig, object_cloud
+from app.predict.grasp_centering import held_width
 from app.predict.predict import Prediction, predict
 from app.tasks.task import Task
 from hardware.interfaces import Arm, DepthCamera, Gripper
@@ -199,7 +200,7 @@ def _run(job: _Job) -> None:
         if options is None or np.linalg.norm(cloud.mean(axis=0) - seen) > MOVED:
             options = _imitate(job, cloud)
         seen = cloud.mean(axis=0)
-        plan, chosen = _plan(job, planner, options)
+        plan, chosen = _plan(job, planner, options, cloud)
         try:
             _pick(job, plan)
         except GraspMissed as miss:
@@ -233,14 +234,19 @@ def _imitate(job: _Job, cloud: np.ndarray) -> list:
     return pred.options()
 
 
-def _plan(job: _Job, planner: Planner, options: list):
-    """The first pair the cell can plan (`app.jobs.choice.choose`), its poses and figures recorded."""
+def _plan(job: _Job, planner: Planner, options: list, cloud: np.ndarray):
+    """The first pair the cell can plan (`app.jobs.choice.choose`), its poses and figures recorded;
+    while the object is held the fingers are modelled closed on what the cloud shows between them."""
+    def widths(T_grasp: np.ndarray) -> tuple[float, float]:
+        held = held_width(T_grasp, cloud)
+        return held, held + job.config.release_clearance
+
     with job.stage("plan"):
         q = job.arm.getActualQ()
         failure = reach_failure(job.kin, job.scene, q, ignore=(OBJECT,))
         try:
             choice = choose(planner, options, q, job.t.place_direction(job.T_base_fixture), failure,
-                            job.config.most_plans)
+                            job.config.most_plans, widths)
         except NoCandidate as exc:
             job.result.candidates += exc.tried
             raise

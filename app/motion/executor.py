@@ -118,14 +118,17 @@ class Planner:
                            label)
 
     def pick_place(self, q_start: np.ndarray, T_base_grasp: np.ndarray, T_base_place: np.ndarray,
-                   place_direction: np.ndarray) -> PickPlacePlan:
+                   place_direction: np.ndarray, widths: tuple[float, float] | None = None) -> PickPlacePlan:
         """The whole motion for a grasp and a place pose of the TCP; `place_direction` (3,) is the
-        unit direction the object comes from onto the fixture (base frame)."""
+        unit direction the object comes from onto the fixture (base frame); `widths` (m): the fingers'
+        opening while the object is held (carry, place) and once it is let go (retreat, clear, home) -
+        fully open when not given."""
         start = time.perf_counter()
         plans, errors = [], []
         for flip in (np.eye(4), HALF_TURN):
             try:
-                plans.append(self._pick_place(q_start, T_base_grasp @ flip, T_base_place @ flip, place_direction))
+                plans.append(self._pick_place(q_start, T_base_grasp @ flip, T_base_place @ flip, place_direction,
+                                              widths))
             except NoIKSolution as exc:
                 errors.append(str(exc))
         if not plans:
@@ -134,8 +137,9 @@ class Planner:
         best.seconds = time.perf_counter() - start
         return best
 
-    def _pick_place(self, q_start, T_grasp, T_place, place_direction) -> PickPlacePlan:
+    def _pick_place(self, q_start, T_grasp, T_place, place_direction, widths) -> PickPlacePlan:
         c = self.config
+        held, released = widths or (self.scene.geometry.stroke, self.scene.geometry.stroke)
         T_pre_grasp = T_grasp @ make_pose(t=[0.0, 0.0, -c.approach_distance])
         T_lift = make_pose(T_grasp[:3, :3], T_grasp[:3, 3] + [0.0, 0.0, c.lift_height])
         T_pre_place = make_pose(T_place[:3, :3], T_place[:3, 3] + c.place_distance * np.asarray(place_direction))
@@ -145,15 +149,23 @@ class Planner:
                                      lambda q: (reverse(self.line(q, T_pre_grasp, "approach", (OBJECT,))),
                                                 self.line(q, T_lift, "lift", (OBJECT,))))
         to_pre_grasp = self.transit(q_start, approach.q[0], "to pre-grasp")
-        place, retreat = self._first(solutions(self.kin, T_place, lift.end, self.scene, c.ik, (OBJECT,), "place"),
-                                     lambda q: (reverse(self.line(q, T_pre_place, "place", (OBJECT,))),
-                                                self.line(q, T_retreat, "retreat", (OBJECT,))))
-        with self.scene.holding(OBJECT, T_grasp):  # the carried object must clear the cell too
+
+        def place_lines(q: np.ndarray):
+            with self.scene.fingers(held):
+                place = reverse(self.line(q, T_pre_place, "place", (OBJECT,)))
+            with self.scene.fingers(released):
+                return place, self.line(q, T_retreat, "retreat", (OBJECT,))
+
+        with self.scene.fingers(held):
+            at_place = solutions(self.kin, T_place, lift.end, self.scene, c.ik, (OBJECT,), "place")
+        place, retreat = self._first(at_place, place_lines)
+        with self.scene.holding(OBJECT, T_grasp), self.scene.fingers(held):  # the carried object must clear the cell too
             carry = self.transit(lift.end, place.q[0], "carry", ignore=(OBJECT,))
         T_clear = self.kin.fk(retreat.end)
         T_clear[2, 3] += c.lift_height
-        clear = self.line(retreat.end, T_clear, "clear", ignore=(OBJECT,))
-        home = self.transit(clear.end, np.asarray(c.home_q), "home", ignore=(OBJECT,))
+        with self.scene.fingers(released):
+            clear = self.line(retreat.end, T_clear, "clear", ignore=(OBJECT,))
+            home = self.transit(clear.end, np.asarray(c.home_q), "home", ignore=(OBJECT,))
         segments = [to_pre_grasp, approach, lift, carry, place, retreat, clear, home]
         travel = float(sum(np.abs(np.diff(s.q, axis=0)).sum() for s in segments))
         return PickPlacePlan(segments, T_grasp, T_place, travel=travel)

@@ -80,7 +80,7 @@ def reach_failure(kin: UR5Kinematics, scene: PlanningScene, q_current: np.ndarra
 
     def failure(T_base_tcp: np.ndarray, what: str = "pose") -> str | None:
         if hits := scene.gripper_collisions(T_base_tcp, ignore):
-            return f"the open gripper at the {what} hits {', '.join(hits)}"
+            return f"the gripper at the {what} hits {', '.join(hits)}"
         try:
             solutions(kin, T_base_tcp, q_current, scene, config, ignore, what)
         except NoIKSolution as exc:

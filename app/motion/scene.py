@@ -15,7 +15,9 @@ Without it a carried mug was swept through the rack in 2 of 10 executed teacher 
 the protective stops that followed; MoveIt calls this an attached collision object).
 
 `gripper_collisions(T_base_tcp)` asks the same of the gripper alone, open, at a TCP pose, without
-the arm: a cheap first test of candidate grasp and place poses before any IK (`app.predict.feasibility`).
+the arm: a cheap first test of candidate grasp and place poses before any IK (`app.jobs.choice`).
+Inside `fingers(width)` both grippers' fingers stand that far apart instead of fully open: closed
+on a held object, whose open fingers would reach 4 cm to each side into a rack's post.
 """
 from __future__ import annotations
 
@@ -46,6 +48,7 @@ class PlanningScene:
                  geometry: GripperGeometry = GripperGeometry()) -> None:
         self.margin = margin  # metres of clearance that count as a collision
         self.geometry = geometry
+        self.finger_width = geometry.stroke  # m between the fingers' inner faces (`fingers`)
         self.kinematics = UR5Kinematics(tcp_offset=geometry.T_tool0_tcp)
         self.client: int | None = p.connect(p.DIRECT)
         p.setPhysicsEngineParameter(deterministicOverlappingPairs=1, physicsClientId=self.client)
@@ -67,11 +70,28 @@ class PlanningScene:
             self.client = None
 
     def set_q(self, q: np.ndarray) -> None:
-        """Put the model arm at q (fingers fully open: the widest the gripper gets)."""
+        """Put the model arm at q, the fingers `finger_width` apart (fully open unless `fingers` says)."""
         for joint, qi in zip(self.arm_joints, q):
             p.resetJointState(self.robot, joint, float(qi), 0.0, physicsClientId=self.client)
         for joint in self.finger_joints:
-            p.resetJointState(self.robot, joint, self.geometry.stroke / 2, 0.0, physicsClientId=self.client)
+            p.resetJointState(self.robot, joint, self.finger_width / 2, 0.0, physicsClientId=self.client)
+
+    @contextmanager
+    def fingers(self, width: float):
+        """Within the block the model's fingers (the arm's and the free gripper's) stand `width` apart,
+        clipped to the stroke: while an object is held they are closed on it, not fully open."""
+        before = self.finger_width
+        self.finger_width = float(np.clip(width, 0.0, self.geometry.stroke))
+        self._set_ghost_fingers()
+        try:
+            yield self
+        finally:
+            self.finger_width = before
+            self._set_ghost_fingers()
+
+    def _set_ghost_fingers(self) -> None:
+        for joint in self.ghost_fingers:
+            p.resetJointState(self.ghost, joint, self.finger_width / 2, 0.0, physicsClientId=self.client)
 
     def add_cloud(self, name: str, points: np.ndarray, eye: np.ndarray | None = None, depth: float = 0.03) -> None:
         """An obstacle from a single-view cloud (N, 3) in the base frame: the convex hull of the
@@ -102,12 +122,14 @@ class PlanningScene:
         path = write_cached("nift_gripper", standalone_gripper_urdf(self.geometry))
         body = p.loadURDF(str(path), [0.0, 0.0, -10.0], useFixedBase=True, physicsClientId=self.client)
         joints, _ = joint_and_link_indices(body, self.client)
-        for name in FINGER_JOINTS:
-            p.resetJointState(body, joints[name], self.geometry.stroke / 2, 0.0, physicsClientId=self.client)
+        self.ghost_fingers = [joints[name] for name in FINGER_JOINTS]
+        for joint in self.ghost_fingers:
+            p.resetJointState(body, joint, self.finger_width / 2, 0.0, physicsClientId=self.client)
         return body
 
     def gripper_collisions(self, T_base_tcp: np.ndarray, ignore: tuple[str, ...] = ()) -> list[str]:
-        """Obstacles (not in `ignore`) the open gripper alone would hit at a TCP pose - no arm, no IK."""
+        """Obstacles (not in `ignore`) the gripper alone (fingers `finger_width` apart) would hit at a TCP
+        pose - no arm, no IK."""
         set_pose(self.client, self.ghost, T_base_tcp @ np.linalg.inv(self.geometry.T_tool0_tcp))
         return self._obstacles_near(self.ghost, ignore)
 

@@ -53,3 +53,14 @@ def center_grasp(T_base_tcp: np.ndarray, cloud: np.ndarray, geometry: GripperGeo
     out = T_base_tcp.copy()
     out[:3, 3] += shift * T_base_tcp[:3, 1]
     return out
+
+
+def held_width(T_base_tcp: np.ndarray, cloud: np.ndarray, geometry: GripperGeometry = GripperGeometry(),
+               margin: float = 0.015, min_points: int = MIN_POINTS) -> float:
+    """How far apart (m) the fingers will stand once closed at T_base_tcp: the extent of the swept
+    points along the closing axis plus `margin` (one view shows the front of what lies between the
+    fingers), clipped to the stroke; the full stroke when too few points lie between them."""
+    p = swept_points(T_base_tcp, cloud, geometry)
+    if len(p) < min_points:
+        return geometry.stroke
+    return float(min(geometry.stroke, np.ptp(p[:, 1]) + margin))

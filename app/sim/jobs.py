@@ -87,6 +87,7 @@ def run_sim_job(cell: SimCell, scene: PlanningScene, T_base_cam: np.ndarray, spe
     """Spawn the spec's object, run the job, remove the object; the strip goes to `record`
     (`hooks_type`, `predictor_of(object)`: other simulator hooks and poses, for tests)."""
     reset_arm(cell)
+    cell.camera.reseed(np.random.SeedSequence(spec.seed).spawn(1)[0])  # the job's frames follow from its seed alone
     obj = spawn_test_object(cell.world, spec.task, spec.pose, np.random.default_rng(spec.seed))
     hooks = hooks_type(cell, obj, spec.task, record is not None)
     try:

@@ -119,6 +119,11 @@ class SimKinect(DepthCamera):
     def intrinsics(self) -> CameraIntrinsics:
         return self.config.intrinsics
 
+    def reseed(self, seed: int | np.random.SeedSequence) -> None:
+        """Restart the depth noise's random stream (the simulator's own: a job's seed then gives the
+        same frames whatever the camera captured before, e.g. a calibration in the same process)."""
+        self._rng = np.random.default_rng(seed)
+
     def _connect(self) -> None:
         self.world.connect()
 
