@@ -194,3 +194,20 @@ def test_predict_asks_the_cell_about_the_tcp_at_the_grasp_and_at_the_place_it_pi
     refused = predict(task("mug"), cloud, "ibs-nif", config=config, center=False, reachable=lambda T: False)
     plain = predict(task("mug"), cloud, "ibs-nif", config=config, center=False, feasible=False)
     assert np.allclose(refused.T_base_tcp, plain.T_base_tcp)
+
+
+def test_leaving_out_negligible_place_points_keeps_the_loss_and_refuses_a_share_of_one(demo):
+    from app.nift.imitate import losses_at, targets_and_weights
+
+    cloud, stages = demo
+    template, truth = stages["place"]
+    rng = np.random.default_rng(0)
+    poses = np.stack([truth @ make_pose(rotvec_to_matrix(rng.normal(0, 0.2, 3)), rng.normal(0, 0.01, 3))
+                      for _ in range(8)])
+    full, light = ImitationConfig(), ImitationConfig(min_weight=1e-3)
+    kept = len(targets_and_weights(template, light)[0])
+    assert kept < 0.9 * len(template.points)
+    np.testing.assert_allclose(losses_at(template, cloud, poses, light), losses_at(template, cloud, poses, full), rtol=0.01)
+    assert len(targets_and_weights(stages["grasp"][0], light)[0]) == len(stages["grasp"][0].points)  # uniform: all
+    with pytest.raises(ValueError, match="min_weight"):
+        ImitationConfig(min_weight=1.0)

@@ -48,10 +48,11 @@ from hardware.se3 import pose_to_ur, ur_to_pose
 Predictor = Callable[[np.ndarray], Prediction]  # object cloud (N, 3), base frame -> grasp and place
 STAGES = ("capture", "perceive", "imitate", "plan", "approach", "grasp", "lift", "recover", "carry", "place",
           "release", "retreat", "verify")
-# The cell's imitation schedule: prune every 10 steps, explore on 128 points, stop after 25 steps
-# without gain, decay over 200 steps, refine 4 poses and keep one per basin (docs/jobs.md, "Imitation time").
-JOB_IMITATION = ImitationConfig(prune_every=10, explore_points=128, patience=25, iterations=200, keep=4,
-                               diverse=True, candidates=CandidateConfig(margin=0.3, most=8))
+# The cell's imitation schedule: prune every 10 steps down to 3 poses, one per basin, explore on 128
+# points and refine on 256, leave out points of negligible weight, stop after 25 steps without gain,
+# decay over 200 steps (docs/jobs.md, "Imitation time").
+JOB_IMITATION = ImitationConfig(prune_every=10, explore_points=128, refine_points=256, patience=25, iterations=200,
+                               keep=3, min_weight=1e-3, diverse=True, candidates=CandidateConfig(margin=0.3, most=8))
 MOVED = 0.01  # m: a cloud whose centroid moved more than this since the last look is imitated again
 
 

@@ -27,11 +27,13 @@ class ImitationConfig:
     prune_every: int = 25  # > 0: every so many steps drop the worse half of the inits (0 = off, the paper's)
     keep: int = 2  # pruning keeps at least this many
     explore_points: int = 256  # while pruning, the loss uses this random subset of the points (0 = all)
+    refine_points: int = 0  # after pruning, the loss uses this random subset (0 = all); the final scores use all
     # Contact weighting (our addition): the loss weights each template point by exp(-d / scale), d its
     # distance to the anchor, instead of the paper's plain mean (scale 0). On for place templates:
     # on the rack only ~15 % of the points lie near the peg, and the mug's handle got lost in the mean
     # (first 20 bench trials, mug place 0.30 -> 0.60 upright, 0.25 -> 0.40 arbitrary); off for grasp
     # templates, where it cost bowl and mug grasps (docs/additions.md, "Contact weighting").
+    min_weight: float = 0.0  # > 0: leave out points weighted below this share of the largest weight
     grasp_contact_scale: float = 0.0  # metres, for templates of the gripper
     place_contact_scale: float = 0.01  # metres, for templates of a fixture (rack, shelf)
     # Demo matching (our addition): "mean" compares a pose with the demos' mean features (the paper's
@@ -49,6 +51,8 @@ class ImitationConfig:
         for name in ("grasp_demo_match", "place_demo_match"):
             if getattr(self, name) not in DEMO_MATCHES:
                 raise ValueError(f"unknown {name} {getattr(self, name)!r}; choose one of {', '.join(DEMO_MATCHES)}")
+        if not 0.0 <= self.min_weight < 1.0:
+            raise ValueError(f"min_weight must be in [0, 1) (a share of the largest point weight), got {self.min_weight}")
         for name in ("grasp_contact_scale", "place_contact_scale"):
             if not getattr(self, name) >= 0.0:  # also NaN
                 raise ValueError(f"{name} must be >= 0 metres (0: the paper's plain mean), got {getattr(self, name)}")
