@@ -44,6 +44,23 @@ class GripperGeometry:
         return T
 
 
+    def corners(self, width: float | None = None) -> np.ndarray:
+        """(24, 3) corners of the palm's and the two fingers' boxes in the TCP frame, the fingers
+        `width` apart (default fully open)."""
+        w = self.stroke if width is None else width
+        (px, py, pz), (fx, fy, fz) = self.palm, self.finger
+        boxes = [((-px / 2, px / 2), (-py / 2, py / 2), (0.0, pz))]
+        boxes += [((-fx / 2, fx / 2), tuple(sorted((s * w / 2, s * (w / 2 + fy)))), (pz, pz + fz)) for s in (1, -1)]
+        out = [[x, y, z - self.tcp_z] for xs, ys, zs in boxes for x in xs for y in ys for z in zs]
+        return np.array(out)
+
+
+def lowest_point(T_base_tcp: np.ndarray, geometry: GripperGeometry = GripperGeometry()) -> float:
+    """Height (m, base frame) of the open gripper's lowest corner at a TCP pose: below the table top
+    (z = 0) the gripper would be in the table."""
+    return float((geometry.corners() @ T_base_tcp[:3, :3].T + T_base_tcp[:3, 3])[:, 2].min())
+
+
 FINGER_JOINTS = ("finger_left_joint", "finger_right_joint")
 FINGER_LINKS = ("finger_left", "finger_right")
 PALM_LINK = "gripper_palm"

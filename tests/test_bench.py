@@ -25,6 +25,7 @@ def test_oracle_scores_high_and_wrong_poses_score_zero(tmp_path, monkeypatch):
     for pose in config.poses:
         for t in config.tasks:
             assert oracle[pose][ORACLE][t]["overall"] >= 0.95, (pose, t, oracle[pose][ORACLE][t])
+    assert all(oracle["upright"][ORACLE][t]["in_table"] == 0.0 for t in config.tasks)  # the teacher grasps from above
 
     true_teacher = trial_module.teacher_prediction
 
@@ -179,3 +180,13 @@ def test_executed_setting_runs_whole_jobs_and_the_oracle_succeeds(tmp_path):
     # the carry, and at least one of the two bowls ends on the shelf
     assert len(rows) == 2 and all(r["grasp"] for r in rows), [r["why"] for r in rows]
     assert any(r["overall"] for r in rows), [r["why"] for r in rows]
+
+
+def test_the_open_grippers_lowest_point_is_its_fingertips_pointing_down_and_its_palm_side_lying_flat():
+    from hardware.gripper_geometry import GripperGeometry, lowest_point
+
+    g = GripperGeometry()
+    down = make_pose(rotvec_to_matrix([np.pi, 0.0, 0.0]), [0.5, 0.0, 0.01])
+    assert np.isclose(lowest_point(down), 0.01 - g.finger[2] / 3)  # the TCP sits 2/3 down the fingers
+    sideways = make_pose(rotvec_to_matrix([np.pi / 2, 0.0, 0.0]), [0.5, 0.0, 0.08])  # closing axis vertical
+    assert np.isclose(lowest_point(sideways), 0.08 - g.palm[1] / 2)  # the palm's long side

@@ -22,6 +22,8 @@ def summarise(rows: list[dict], tasks: list[str], poses: list[str], methods: lis
                 sel = [r for r in rows if r["pose"] == pose and r["method"] == method and r["task"] == t]
                 if sel:
                     cells[t] = {k: round(float(np.mean([r[k] for r in sel])), 3) for k in KINDS} | {"n": len(sel)}
+                    if all("gripper_in_table" in r for r in sel):
+                        cells[t]["in_table"] = round(float(np.mean([r["gripper_in_table"] for r in sel])), 3)
             if cells:
                 cells["mean"] = {k: round(float(np.mean([c[k] for c in cells.values()])), 3) for k in KINDS}
                 out.setdefault(pose, {})[method] = cells
@@ -43,6 +45,10 @@ def markdown(summary: dict, tasks: list[str], title: str) -> str:
         ns = [c["n"] for cells in by_method.values() for t, c in cells.items() if t != "mean"]
         n = str(max(ns)) if min(ns) == max(ns) else f"{min(ns)}-{max(ns)}"
         lines += ["", f"{n} trials per task; G grasp, P place, O overall success.", ""]
+        lines += [f"Grasps that put the open gripper into the table (judged as the paper does, without it), {method}: "
+                  + ", ".join(f"{t} {c['in_table']:.2f}" for t, c in cells.items() if "in_table" in c) + "."
+                  for method, cells in by_method.items() if any("in_table" in c for c in cells.values())]
+        lines += [""] if any("in_table" in c for cells in by_method.values() for c in cells.values()) else []
     return "\n".join(lines)
 
 

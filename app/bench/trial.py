@@ -2,8 +2,10 @@
 
 Teleported (the paper's setting): each method's grasp is judged by a free-floating gripper at the
 predicted pose, its place by setting the object at the predicted goal pose, each on a freshly
-spawned copy of the object in the trial's pose. Executed: the whole job runs in the sim cell
-(camera, perception, IK, trajectories, the gripper) for each method.
+spawned copy of the object in the trial's pose; beside that judge, each teleported row says whether
+the open gripper at the grasp would reach into the table (`gripper_in_table`: its lowest corner
+more than 2 mm below the top), which the paper's protocol ignores and a cell cannot do. Executed:
+the whole job runs in the sim cell (camera, perception, IK, trajectories, the gripper) for each method.
 """
 from __future__ import annotations
 
@@ -22,7 +24,10 @@ from app.sim.judges import judge_grasp, judge_place
 from app.sim.oracle import teacher_prediction
 from app.sim.spawn import SpawnedObject, spawn
 from app.tasks.task import task
+from hardware.gripper_geometry import lowest_point
 from hardware.sim.world import SimWorld, SimWorldConfig
+
+IN_TABLE = 0.002  # m below the table top that count as into the table
 
 
 class TeleportedBench:
@@ -65,7 +70,7 @@ class TeleportedBench:
                                    config.feasible, align=config.aligns)
             except ValueError as exc:
                 rows.append({**base, "method": method, "grasp": False, "place": False, "overall": False,
-                             "why": f"no prediction: {exc}", "seconds": round(time.perf_counter() - start, 2)})
+                             "gripper_in_table": False, "why": f"no prediction: {exc}", "seconds": round(time.perf_counter() - start, 2)})
                 continue
             seconds = time.perf_counter() - start
             grasp = self.judge_copy(obj, T_base_obj, trial.pose,
@@ -75,6 +80,7 @@ class TeleportedBench:
                                                       self.fixtures[t.fixture], t.upright))
             rows.append({**base, "method": method, "grasp": grasp.success, "place": place.success,
                          "overall": grasp.success and place.success,
+                         "gripper_in_table": lowest_point(pred.T_base_tcp) < -IN_TABLE,
                          "why": f"grasp: {grasp.reason}; place: {place.reason}", "seconds": round(seconds, 2)})
         return rows
 
