@@ -12,7 +12,9 @@ Our additions, as a person at the cell would work:
 - the hold is checked after closing and after the lift (the gripper's width and object_detected);
   on a miss the gripper opens, backs off along the approach, the arm goes home, the camera looks
   again and the next candidate with another grasp is tried (re-imitated when the object moved),
-  up to `JobConfig.attempts` grasps. Every attempt goes in the record.
+  up to `JobConfig.attempts` grasps. Every attempt goes in the record;
+- after the release the camera checks that something new stands where the object was sent
+  (`app.jobs.check`); a cell without a judge of its own reports that as the job's verdict.
 """
 from __future__ import annotations
 
@@ -24,6 +26,7 @@ from typing import Callable
 
 import numpy as np
 
+from app.jobs.check import placed
 from app.jobs.choice import NoCandidate, choose, describe
 from app.motion.executor import (
     OBJECT,
@@ -41,9 +44,9 @@ from app.perception import PerceptionConfig, object_cloud
 from app.predict.grasp_centering import held_width
 from app.predict.predict import Prediction, predict
 from app.tasks.task import Task
-from hardware.interfaces import Arm, DepthCamera, Gripper
+from hardware.interfaces import Arm, DepthCamera, Frame, Gripper
 from hardware.kinematics import UR5Kinematics
-from hardware.se3 import pose_to_ur, ur_to_pose
+from hardware.se3 import pose_to_ur, transform_points, ur_to_pose
 
 Predictor = Callable[[np.ndarray], Prediction]  # object cloud (N, 3), base frame -> grasp and place
 STAGES = ("capture", "perceive", "imitate", "plan", "approach", "grasp", "lift", "recover", "carry", "place",
@@ -92,9 +95,10 @@ class JobHooks:
     def keyframe(self, label: str) -> None:
         """A stage has finished (take a picture, log, ...)."""
 
-    def verify(self) -> tuple[bool, str]:
-        """(success, why) once the object has been let go on the fixture."""
-        return True, "not verified (this cell has no check of the final object pose)"
+    def verify(self, seen: tuple[bool, str]) -> tuple[bool, str]:
+        """(success, why) once the object has been let go on the fixture; `seen` is the job's own
+        camera check (`app.jobs.check.placed`), which this default reports."""
+        return seen
 
 
 class JobFailed(RuntimeError):
@@ -119,6 +123,7 @@ class JobResult:
     poses: dict[str, list[float]] = field(default_factory=dict)  # UR poses [x y z rx ry rz], base frame
     plan: dict[str, float] = field(default_factory=dict)
     arm: str = ""  # the arm's state at the end
+    seen: str = ""  # the job's own camera check after the release (`app.jobs.check`)
     candidates: list[dict] = field(default_factory=list)  # every pair the plan stage looked at (`choice.describe`)
     attempts: list[dict] = field(default_factory=list)  # one per grasp: its candidate and the outcome
     info: dict = field(default_factory=dict)  # the cell's own facts (object, seed, ...)
@@ -127,7 +132,7 @@ class JobResult:
         """JSON-ready."""
         return {"task": self.task, "method": self.method, "success": self.success, "failed_stage": self.failed_stage,
                 "reason": self.reason, "seconds": self.seconds, "total_seconds": round(sum(self.seconds.values()), 3),
-                "poses": self.poses, "plan": self.plan, "arm": self.arm, "candidates": self.candidates,
+                "poses": self.poses, "plan": self.plan, "arm": self.arm, "seen": self.seen, "candidates": self.candidates,
                 "attempts": self.attempts, **self.info}
 
 
@@ -188,6 +193,7 @@ class _Job:
     hooks: JobHooks
     predictor: Predictor
     result: JobResult
+    first: Frame | None = None  # the first frame: the fixture without the object
 
     def stage(self, name: str):
         return _stage(self.result, name, self.hooks)
@@ -202,6 +208,7 @@ def _run(job: _Job) -> None:
             options = _imitate(job, cloud)
         seen = cloud.mean(axis=0)
         plan, chosen = _plan(job, planner, options, cloud)
+        sent = transform_points(chosen.motion, cloud)  # where the object should end
         try:
             _pick(job, plan)
         except GraspMissed as miss:
@@ -214,13 +221,14 @@ def _run(job: _Job) -> None:
         job.result.attempts.append({"attempt": attempt, **describe(chosen, "held")})
         job.result.failed_stage = None
         break
-    _place(job, plan)
+    _place(job, plan, sent)
 
 
 def _observe(job: _Job) -> np.ndarray:
     """Capture and perceive: the object's cloud (N, 3), added to the planning scene."""
     with job.stage("capture"):
         frame = job.camera.capture()
+        job.first = job.first or frame
     with job.stage("perceive"):
         cloud = object_cloud(frame, job.T_base_cam, job.config.perception)
         job.scene.add_cloud(OBJECT, cloud, eye=job.T_base_cam[:3, 3])
@@ -289,8 +297,8 @@ def _recover(job: _Job, planner: Planner, plan) -> None:
         execute(job.arm, planner.transit(job.arm.getActualQ(), home, "recover"), tolerance)
 
 
-def _place(job: _Job, plan) -> None:
-    """Carry, place, release, retreat, verify."""
+def _place(job: _Job, plan, sent: np.ndarray) -> None:
+    """Carry, place, release, retreat, verify (`sent`: the observed cloud moved where it should end)."""
     tolerance = job.config.executor.end_tolerance
     with job.stage("carry"):
         execute(job.arm, plan.segment("carry"), tolerance)
@@ -304,7 +312,9 @@ def _place(job: _Job, plan) -> None:
         for name in ("retreat", "clear", "home"):
             execute(job.arm, plan.segment(name), tolerance)
     with job.stage("verify"):
-        ok, why = job.hooks.verify()
+        seen = placed(job.first, job.camera.capture(), job.T_base_cam, sent)
+        job.result.seen = f"{'placed' if seen[0] else 'not placed'}: {seen[1]}"
+        ok, why = job.hooks.verify(seen)
         if not ok:
             raise JobFailed(f"place failed: {why}")
         job.result.success, job.result.reason = True, why

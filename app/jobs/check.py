@@ -1,0 +1,57 @@
+"""The job's own check that the object ended on the fixture, from its camera alone (our addition).
+
+The Kinect is fixed, so the job's first frame is a picture of the fixture without the object. After
+the release, with the arm home again, a second frame is compared with it pixel by pixel: pixels
+that came at least `closer` nearer to the camera show something new. Back-projected into the base
+frame, they should gather where the object was sent: the observed cloud moved by the place motion,
+X' = M X, with centroid c and radius r (its farthest point from c). With n(R) the new points
+within R of c,
+
+    placed  <=>  n(r + slack) >= min_points  and  n(r + slack) >= share * n(2 (r + slack))
+
+The object's unseen back and a mug that swings on its peg put new points centimetres from X'
+itself, so the test is the ball, not the points. An object that fell to the table or the floor
+makes new points outside it (or none there); further away the Kinect's noise makes new pixels of
+its own (1,400 on the floor 3 m off between two frames of a still scene), which the outer ball
+leaves out. The simulator's own judge stays the benchmark's verdict; this is what a real cell
+can know.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from hardware.interfaces import Frame
+from hardware.se3 import transform_points
+
+
+@dataclass(frozen=True)
+class PlacedCheck:
+    """Thresholds of the camera check."""
+
+    closer: float = 0.02  # m nearer the camera than in the first frame: something new (depth noise: a few mm)
+    slack: float = 0.03  # m beyond the object's radius
+    min_points: int = 100  # new pixels in the ball
+    share: float = 0.5  # of the new pixels in the ball of twice its radius
+
+
+def new_points(before: Frame, after: Frame, T_base_cam: np.ndarray, closer: float) -> np.ndarray:
+    """(K, 3) base-frame points of the pixels of `after` at least `closer` nearer than in `before`."""
+    d0, d1 = np.asarray(before.depth, float), np.asarray(after.depth, float)  # (H, W) metres, 0 = invalid
+    mask = (d1 > 0) & ((d0 <= 0) | (d1 < d0 - closer))
+    v, u = np.nonzero(mask)
+    z = d1[mask]
+    K = after.intrinsics
+    cam = np.column_stack([(u - K.cx) * z / K.fx, (v - K.cy) * z / K.fy, z])  # (K, 3) camera frame
+    return transform_points(T_base_cam, cam)
+
+
+def placed(before: Frame, after: Frame, T_base_cam: np.ndarray, expected: np.ndarray,
+           check: PlacedCheck = PlacedCheck()) -> tuple[bool, str]:
+    """(placed, why): whether the new points of `after` gather where the object was sent (`expected`, (N, 3))."""
+    c = expected.mean(axis=0)
+    R = float(np.linalg.norm(expected - c, axis=1).max()) + check.slack
+    d = np.linalg.norm(new_points(before, after, T_base_cam, check.closer) - c, axis=1)  # (K,)
+    inside, around = int((d < R).sum()), int((d < 2 * R).sum())
+    ok = inside >= check.min_points and inside >= check.share * around
+    return ok, f"{inside} new points within {R:.2f} m of where the object was sent, {around} within {2 * R:.2f} m"
