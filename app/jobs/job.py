@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import time
 from contextlib import contextmanager
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Callable
 
@@ -43,6 +43,7 @@ from app.nift.imitate import ImitationConfig, use_threads
 from app.perception import PerceptionConfig, object_cloud
 from app.predict.grasp_centering import held_width
 from app.predict.predict import Prediction, predict
+from app.predict.table_clearance import backed_off_table
 from app.tasks.task import Task
 from hardware.interfaces import Arm, DepthCamera, Frame, Gripper
 from hardware.kinematics import UR5Kinematics
@@ -73,6 +74,7 @@ class JobConfig:
     # one Kinect's normals at a rim are too far off (docs/additions.md, "Grasp alignment")
     feasible: bool = True  # prefer grasps that close on something and places the grasp can carry to
     # (app.predict.feasibility); what the cell can reach is chosen among the candidates (app.jobs.choice)
+    table_z: float = 0.0  # m, the table top in the base frame (the cell's layout)
     attempts: int = 3  # grasps tried before the job gives up
     most_plans: int = 6  # full plans tried per attempt before the plan stage gives up
     threads: int = 1  # torch threads: two threads beside one busy process took 2.5x as long as one (docs/jobs.md)
@@ -236,11 +238,14 @@ def _observe(job: _Job) -> np.ndarray:
 
 
 def _imitate(job: _Job, cloud: np.ndarray) -> list:
-    """The predictor's candidate pairs, best first; the best one's poses go in the record at once."""
+    """The predictor's candidate pairs, best first, their grasps backed off the table
+    (`app.predict.table_clearance`); the best one's poses go in the record at once."""
     with job.stage("imitate"):
         pred = job.predictor(cloud)
+        options = [replace(c, T_base_tcp=backed_off_table(c.T_base_tcp, cloud, job.config.table_z))
+                   for c in pred.options()]
     job.result.poses = {"grasp": _ur(pred.T_base_tcp), "place": _ur(pred.T_base_tcp_place)}
-    return pred.options()
+    return options
 
 
 def _plan(job: _Job, planner: Planner, options: list, cloud: np.ndarray):
