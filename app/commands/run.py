@@ -91,6 +91,10 @@ def _print_one(r) -> None:
         print(f"  plan: {r.plan['planning_seconds']} s to plan, {r.plan['trajectory_seconds']} s of motion")
     for name, pose in r.poses.items():
         print(f"  {name} TCP [x y z rx ry rz]: {pose}")
+    if r.seen:
+        print(f"  camera: {r.seen}")
+    if len(r.attempts) > 1:
+        print("  attempts: " + "; ".join(f"{a['attempt']}: {a['outcome']}" for a in r.attempts))
     print(f"  arm: {r.arm}")
     if "record" in r.info:
         print(f"  key frames: {r.info['record']}")
