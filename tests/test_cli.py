@@ -118,3 +118,13 @@ def test_run_refuses_bad_options_in_one_line(tmp_path):
     assert out.returncode == 2 and "--jobs" in out.stderr
     out = nift("bench", "--tasks", "cup", "--out", str(tmp_path / "b"))
     assert out.returncode == 2 and "unknown task 'cup'" in out.stderr
+
+
+def test_imitation_flags_out_of_range_end_in_one_line_before_any_work(tmp_path):
+    from app.tasks.library import DEMOS_DIR, task_demos
+
+    cloud = tmp_path / "cloud.npy"
+    np.save(cloud, task_demos(DEMOS_DIR / "mug")[0].cloud)
+    out = nift("imitate", "--task", "mug", "--cloud", str(cloud), "--inits", "1000000")
+    assert out.returncode == 2 and out.stderr.strip().count("\n") == 0
+    assert "inits must be an integer in [1, 1000], got 1000000" in out.stderr

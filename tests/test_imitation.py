@@ -211,3 +211,11 @@ def test_leaving_out_negligible_place_points_keeps_the_loss_and_refuses_a_share_
     assert len(targets_and_weights(stages["grasp"][0], light)[0]) == len(stages["grasp"][0].points)  # uniform: all
     with pytest.raises(ValueError, match="min_weight"):
         ImitationConfig(min_weight=1.0)
+
+
+@pytest.mark.parametrize("setting", [{"inits": 0}, {"iterations": 0}, {"patience": -1}, {"prune_every": -1},
+                                     {"keep": 1.5}, {"lr": float("nan")}, {"lr_final_ratio": 0.0}, {"inits": True}])
+def test_imitation_settings_out_of_range_are_refused_naming_the_setting(setting):
+    (name, value), = setting.items()
+    with pytest.raises(ValueError, match=f"^{name} must be"):
+        ImitationConfig(**setting)

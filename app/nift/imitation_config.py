@@ -7,6 +7,13 @@ from dataclasses import dataclass, field
 from app.nift.candidates import CandidateConfig
 
 DEMO_MATCHES = ("mean", "nearest")
+# (name, lowest, highest) of the integer settings: beyond MAX_INITS the (inits, points, features)
+# tensors alone outgrow a cell PC's memory (1,000,000 inits asked for 65 GB)
+MAX_INITS = 1000
+INTEGER_RANGES = (("inits", 1, MAX_INITS), ("iterations", 1, 100_000), ("patience", 1, 100_000),
+                  ("prune_every", 0, 100_000), ("keep", 1, MAX_INITS), ("explore_points", 0, 100_000),
+                  ("refine_points", 0, 100_000), ("seed", 0, 2**32 - 1))
+REAL_RANGES = (("lr", 0.0, 10.0), ("lr_final_ratio", 0.0, 1.0))  # (low, high]
 
 
 @dataclass(frozen=True)
@@ -48,6 +55,14 @@ class ImitationConfig:
     seed: int = 0
 
     def __post_init__(self) -> None:
+        for name, low, high in INTEGER_RANGES:
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= high:
+                raise ValueError(f"{name} must be an integer in [{low}, {high}], got {value!r}")
+        for name, low, high in REAL_RANGES:
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or not low < value <= high:
+                raise ValueError(f"{name} must be a number in ({low:g}, {high:g}], got {value!r}")
         for name in ("grasp_demo_match", "place_demo_match"):
             if getattr(self, name) not in DEMO_MATCHES:
                 raise ValueError(f"unknown {name} {getattr(self, name)!r}; choose one of {', '.join(DEMO_MATCHES)}")
