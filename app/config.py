@@ -1,11 +1,13 @@
 """Loading configuration dataclasses from TOML files a user edits.
 
 Each TOML table matches a dataclass field of the same name; keys that the dataclass does not have
-are refused with a one-line error naming the file and the key, so a typo never goes unnoticed.
+are refused with a one-line error naming the file and the key, so a typo never goes unnoticed,
+and so is a value of the wrong type for a true/false, integer, number or string setting.
 """
 from __future__ import annotations
 
 import dataclasses
+import math
 import tomllib
 from pathlib import Path
 from typing import Any, TypeVar, get_type_hints
@@ -29,8 +31,25 @@ def from_dict(cls: type[T], data: dict[str, Any], where: str = "") -> T:
         elif isinstance(value, list):
             values[key] = tuple(tuple(v) if isinstance(v, list) else v for v in value)
         else:
-            values[key] = value
+            values[key] = _checked(hint, value, f"{where}{key!r}")
     return dataclasses.replace(cls(), **values)
+
+
+SCALARS = {bool: "true or false", int: "an integer", float: "a number", str: "a string"}
+
+
+def _checked(hint: Any, value: Any, what: str) -> Any:
+    """`value` if it has the scalar type `hint` asks for (an integer is a number; a float must be
+    finite); other hints pass as they are."""
+    if hint not in SCALARS:
+        return value
+    ok = {bool: lambda v: isinstance(v, bool),
+          int: lambda v: isinstance(v, int) and not isinstance(v, bool),
+          float: lambda v: isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v),
+          str: lambda v: isinstance(v, str)}[hint](value)
+    if not ok:
+        raise ValueError(f"{what} must be {SCALARS[hint]}, got {value!r}")
+    return float(value) if hint is float else value
 
 
 def load_toml(cls: type[T], path: str | Path) -> T:

@@ -26,3 +26,24 @@ def test_edits_take_effect_and_typos_are_named(tmp_path):
         load_toml(CellConfig, path)
     with pytest.raises(FileNotFoundError):
         load_toml(CellConfig, tmp_path / "none.toml")
+
+
+@pytest.mark.parametrize("text, message", [
+    ('camera_noise = "yes"\n', "'camera_noise' must be true or false, got 'yes'"),
+    ('[world]\ntime_step = "fast"\n', "'time_step' must be a number, got 'fast'"),
+    ('[arm]\ncontact_force_limit = true\n', "'contact_force_limit' must be a number, got True"),
+    ('[world]\ntime_step = nan\n', "'time_step' must be a number, got nan"),
+])
+def test_a_value_of_the_wrong_type_is_refused_naming_the_file_and_the_key(tmp_path, text, message):
+    path = tmp_path / "cell.toml"
+    path.write_text(text)
+    with pytest.raises(ValueError, match=f"^{path}: ") as caught:
+        load_toml(CellConfig, path)
+    assert message in str(caught.value)
+
+
+def test_an_integer_where_a_number_is_asked_is_taken_as_that_number(tmp_path):
+    path = tmp_path / "cell.toml"
+    path.write_text("[arm]\ncontact_force_limit = 150\n")
+    limit = load_toml(CellConfig, path).arm.contact_force_limit
+    assert limit == 150.0 and isinstance(limit, float)
