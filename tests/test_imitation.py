@@ -219,3 +219,13 @@ def test_imitation_settings_out_of_range_are_refused_naming_the_setting(setting)
     (name, value), = setting.items()
     with pytest.raises(ValueError, match=f"^{name} must be"):
         ImitationConfig(**setting)
+
+
+def test_a_template_with_nan_features_is_refused_in_one_line(demo):
+    from dataclasses import replace
+
+    cloud, stages = demo
+    template, _ = stages["grasp"]
+    broken = replace(template, features=np.full_like(template.features, np.nan))
+    with pytest.raises(ValueError, match="^the gripper template holds NaN or infinite values"):
+        imitate(broken, cloud, ImitationConfig(iterations=5))

@@ -203,6 +203,8 @@ def imitate(template: Template, cloud: np.ndarray, config: ImitationConfig = Imi
     cloud = np.asarray(cloud, dtype=np.float64)
     if cloud.ndim != 2 or cloud.shape[1] != 3 or len(cloud) < 16:
         raise ValueError(f"the target cloud must be (N, 3) with N >= 16, got shape {cloud.shape}")
+    if not all(np.isfinite(a).all() for a in (template.points, template.features, template.per_demo) if a is not None):
+        raise ValueError(f"the {template.anchor} template holds NaN or infinite values: rebuild it from its demos")
     start = time.perf_counter()
     field = field or load_field(FEATURES[template.feature])
     with frozen(field):
