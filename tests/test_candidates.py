@@ -3,7 +3,8 @@ carry like the demos, and the candidate set of a demo's own cloud."""
 import numpy as np
 
 from app.jobs.job import JOB_IMITATION
-from app.nift.candidates import HALF_TURN_Z, CandidateConfig, candidates, leaders
+from app.nift.candidates import (HALF_TURN_Z, CandidateConfig, candidates,
+                                 leaders)
 from app.nift.imitate import Imitation, imitate
 from app.nift.raycast import scene_of
 from app.nift.template import build_template

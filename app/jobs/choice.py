@@ -53,7 +53,7 @@ class _Cached:
     def __init__(self, failure: Failure) -> None:
         self.failure, self.seen = failure, {}
 
-    def __call__(self, T: np.ndarray, what: str, width: float | None = None) -> str | None:
+    def __call__(self, T: np.ndarray, what: str, width: float = 0.0) -> str | None:
         key = (np.round(T, 6).tobytes(), width)
         if key not in self.seen:
             why = self.failure(T, what)
@@ -67,21 +67,21 @@ def choose(planner: Planner, candidates: list[Candidate], q_start: np.ndarray, p
     NoCandidate with the best pair's reason and the count of pairs tried when none does. `widths(T_grasp)`:
     the fingers' opening while holding and once let go, for the place's tests (fully open if not given)."""
     quick = _Cached(failure)
+    stroke = planner.scene.geometry.stroke
     tried: list[dict] = []
     plans = 0
     for c in candidates:
-        held, released = widths(c.T_base_tcp) if widths else (None, None)
+        held, released = widths(c.T_base_tcp) if widths else (stroke, stroke)
         why = quick(c.T_base_tcp, "grasp")
         if not why:
-            with planner.scene.fingers(held if held is not None else planner.scene.geometry.stroke):
+            with planner.scene.fingers(held):
                 why = quick(c.T_base_tcp_place, "place", held)
         if why:
             tried.append(describe(c, f"{why} (quick test)"))
             continue
         plans += 1
         try:
-            plan = planner.pick_place(q_start, c.T_base_tcp, c.T_base_tcp_place, place_direction,
-                                      (held, released) if widths else None)
+            plan = planner.pick_place(q_start, c.T_base_tcp, c.T_base_tcp_place, place_direction, (held, released))
         except NoIKSolution as exc:
             tried.append(describe(c, str(exc)))
             if plans >= most_plans:

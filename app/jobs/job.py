@@ -28,14 +28,8 @@ import numpy as np
 
 from app.jobs.check import placed
 from app.jobs.choice import NoCandidate, choose, describe
-from app.motion.executor import (
-    OBJECT,
-    ExecutionError,
-    ExecutorConfig,
-    Planner,
-    execute,
-    reverse,
-)
+from app.motion.executor import (OBJECT, ExecutionError, ExecutorConfig,
+                                 Planner, execute, reverse)
 from app.motion.ik import NoIKSolution, reach_failure
 from app.motion.scene import PlanningScene
 from app.nift.candidates import CandidateConfig

@@ -219,7 +219,7 @@ def _poses(r6: torch.Tensor, t: torch.Tensor, c_X: torch.Tensor, c_O: torch.Tens
     return np.stack([make_pose(R[i].double().numpy(), trans[i].double().numpy()) for i in range(len(R))])
 
 
-def _survivors(loss: torch.Tensor, poses: np.ndarray, feasible: Feasible | None, config: ImitationConfig,
+def _survivors(loss: torch.Tensor, poses: np.ndarray | None, feasible: Feasible | None, config: ImitationConfig,
                symmetries: tuple[np.ndarray, ...], n: int) -> torch.Tensor:
     """Rows (n,) a pruning step keeps, by rank: feasible leaders, then feasible followers (the same
     candidate as a better pose, `app.nift.candidates`; only with `config.diverse`), then the
@@ -284,12 +284,12 @@ def _optimise(template: Template, cloud: np.ndarray, config: ImitationConfig, fi
         if stale >= config.patience:
             break
         if config.prune_every and iterations % config.prune_every == 0 and len(alive) > config.keep:
-            keep = _survivors(current, _poses(r6, t, c_X, c_O), feasible, config, symmetries,
-                              max(config.keep, len(alive) // 2))
+            poses = _poses(r6, t, c_X, c_O) if config.diverse or feasible is not None else None  # only if ranked on
+            keep = _survivors(current, poses, feasible, config, symmetries, max(config.keep, len(alive) // 2))
             final_r6[alive], final_t[alive] = r6.detach(), t.detach()  # the dropped ones keep these
             alive = alive[keep]
             (r6, t), opt = _subset(opt, [r6, t], keep)
-            if rows is not None and len(alive) <= config.keep:  # exploration over: refine on every point
+            if rows is not None and len(alive) <= config.keep:  # exploration over: refine (`refine_points`, else all)
                 rows, stale = refine, 0
                 best[alive] = float("inf")
     with torch.no_grad():

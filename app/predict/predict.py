@@ -35,25 +35,15 @@ from app.nift.imitate import ImitationConfig, imitate
 from app.nift.template import FEATURES, field_override
 from app.objects import fixture
 from app.predict.candidates import Candidate, ranked_pairs
-from app.predict.feasibility import (
-    Reach,
-    all_of,
-    carries_like_demos,
-    grips_something,
-    reaches,
-    reaches_at_place,
-)
+from app.predict.feasibility import (Reach, all_of, carries_like_demos,
+                                     grips_something, reaches,
+                                     reaches_at_place)
 from app.predict.grasp_alignment import align_grasp
 from app.predict.grasp_centering import center_grasp
 from app.predict.methods import check_method
 from app.predict.peg_centering import center_on_peg
-from app.tasks.library import (
-    DEMOS_DIR,
-    STAGES,
-    stage_anchor,
-    task_demos,
-    task_templates,
-)
+from app.tasks.library import (DEMOS_DIR, STAGES, stage_anchor, task_demos,
+                               task_templates)
 from app.tasks.task import Task
 from hardware.se3 import invert
 
