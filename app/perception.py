@@ -11,6 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 import open3d as o3d
 
+from hardware.gripper_geometry import GripperGeometry
 from hardware.interfaces import Frame
 
 
@@ -100,3 +101,22 @@ def object_cloud(frame: Frame, T_base_cam: np.ndarray, cfg: PerceptionConfig = P
     pcd = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(points))
     pcd, _ = pcd.remove_statistical_outlier(cfg.outlier_neighbors, cfg.outlier_std_ratio)
     return resample(np.asarray(pcd.points), cfg.n_points, cfg.seed)
+
+
+def held_object_cloud(frame: Frame, T_base_cam: np.ndarray, T_base_tcp: np.ndarray, width: float, near: np.ndarray,
+                      radius: float, cfg: PerceptionConfig = PerceptionConfig(),
+                      geometry: GripperGeometry = GripperGeometry(), margin: float = 0.01) -> np.ndarray:
+    """The points (M, 3), base frame, of an object held in the gripper at T_base_tcp: those within
+    `radius` of `near` (where the object should be), less the gripper's own (its boxes at the TCP
+    pose, fingers `width` apart, grown by `margin`), the largest cluster, outliers removed; a
+    one-line ValueError when nothing is left."""
+    points = back_project(frame, T_base_cam)
+    points = points[np.linalg.norm(points - near, axis=1) < radius]
+    local = (points - T_base_tcp[:3, 3]) @ T_base_tcp[:3, :3]  # (M, 3) TCP frame
+    points = points[~geometry.contains(local, width, margin)]
+    if len(points) < cfg.cluster_min_points:
+        raise ValueError(f"the held object is not in view ({len(points)} points near it)")
+    points = largest_cluster(points, cfg)
+    pcd = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(points))
+    pcd, _ = pcd.remove_statistical_outlier(cfg.outlier_neighbors, cfg.outlier_std_ratio)
+    return np.asarray(pcd.points)

@@ -55,6 +55,15 @@ class GripperGeometry:
         return np.array(out)
 
 
+    def contains(self, points_tcp: np.ndarray, width: float | None = None, margin: float = 0.0) -> np.ndarray:
+        """(N,) bool: which points (N, 3), in the TCP frame, lie inside the palm's or a finger's box
+        (`corners`, fingers `width` apart) grown by `margin` on every side."""
+        boxes = self.corners(width).reshape(3, 8, 3)  # palm, finger, finger
+        lo, hi = boxes.min(axis=1) - margin, boxes.max(axis=1) + margin  # (3, 3)
+        p = np.asarray(points_tcp, float)[:, None]  # (N, 1, 3)
+        return ((p >= lo) & (p <= hi)).all(axis=-1).any(axis=-1)
+
+
 def lowest_point(T_base_tcp: np.ndarray, geometry: GripperGeometry = GripperGeometry()) -> float:
     """Height (m, base frame) of the open gripper's lowest corner at a TCP pose: below the table top
     (z = 0) the gripper would be in the table."""

@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 from app.motion.cartesian import MAX_JOINT_JUMP, line_path
-from app.motion.ik import IKConfig, NoIKSolution, reach_check, solve
+from app.motion.ik import IKConfig, NoIKSolution, reach_failure, solve
 from app.motion.scene import PlanningScene
 from app.motion.trajectory import path_timing, through_waypoints
 from app.sim.cell import CellConfig
@@ -148,9 +148,13 @@ def test_a_held_object_is_carried_and_collides_where_it_goes(kin, scene):
         assert scene.held is None
 
 
-def test_reach_check_passes_a_pose_over_the_table_and_refuses_table_rack_and_far_poses(kin, scene):
+def test_reach_failure_passes_a_pose_over_the_table_and_refuses_table_rack_and_far_poses(kin, scene):
     down = rotvec_to_matrix([np.pi, 0, 0])  # tool pointing down
-    reachable = reach_check(kin, scene, HOME_Q)
+    failure = reach_failure(kin, scene, HOME_Q)
+
+    def reachable(T):
+        return failure(T) is None
+
     assert reachable(make_pose(down, [0.5, 0.0, 0.15]))
     assert scene.gripper_collisions(make_pose(down, [0.5, 0.0, 0.01])) == ["table"]  # fingertips 1 cm into the table
     assert not reachable(make_pose(down, [0.5, 0.0, 0.01]))
@@ -247,3 +251,15 @@ def test_fingers_closed_on_a_held_object_clear_what_the_open_ones_hit(kin, scene
         assert scene.gripper_collisions(T) == ["post"]  # open again after the block
     finally:
         scene.remove("post")
+
+
+def test_gripper_clear_refuses_a_grasp_from_under_the_table_and_passes_the_same_from_above(scene):
+    """A side wall seen as a cloud; grasped from above it is clear, the same contact from below puts
+    the gripper into the table (the back-off cannot help: the approach points up)."""
+    from app.jobs.job import JobConfig, gripper_clear
+
+    wall = np.array([[0.5, y, z] for y in np.linspace(-0.01, 0.01, 5) for z in np.linspace(0.0, 0.1, 40)])
+    clear = gripper_clear(scene, wall, JobConfig())
+    down = rotvec_to_matrix([np.pi, 0, 0])  # approach -z
+    assert clear(make_pose(down, [0.5, 0.0, 0.09]))
+    assert not clear(make_pose(np.eye(3), [0.5, 0.0, 0.02]))  # approach +z: from under the table

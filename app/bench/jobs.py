@@ -31,6 +31,10 @@ def summarise(name: str, results: list[JobResult]) -> dict:
     if planned:
         out[f"{name}_median_planning_seconds"] = round(float(np.median([r.plan["planning_seconds"] for r in planned])), 3)
         out[f"{name}_median_trajectory_seconds"] = round(float(np.median([r.plan["trajectory_seconds"] for r in planned])), 2)
+    looked = [r.look for r in results if r.look]
+    if looked:
+        out[f"{name}_second_look_used"] = sum(bool(k.get("used")) for k in looked)
+        out[f"{name}_second_look_moved_place"] = sum(k.get("place_moved_m", 0.0) > 0.01 for k in looked)
     out[f"{name}_failures"] = dict(sorted(failures.items())) or "none"
     return out
 
@@ -38,10 +42,11 @@ def summarise(name: str, results: list[JobResult]) -> dict:
 def run_jobs_benchmark(jobs: int = 20, method: str = "nift", pose: str = "upright", seed: int = 0,
                        tasks: tuple[str, ...] = ("mug", "bowl", "bottle"), cell_config: CellConfig = CellConfig(),
                        calibration: Path | None = None, progress: Callable[[JobResult], None] = lambda r: None,
-                       records: Path | None = None) -> dict:
+                       records: Path | None = None, second_look: bool = False) -> dict:
     """Run `jobs` jobs per task (seeds seed .. seed + jobs - 1) and summarise them; the camera pose
     comes from the `calibration` file (calibrating first if it is missing), or is the true one;
-    `records`: every job's record, as a JSON list, written there (atomically) at the end."""
+    `records`: every job's record, as a JSON list, written there (atomically) at the end; `second_look`:
+    the jobs' second look at the held object (`app.jobs.second_look`)."""
     from app.sim.calibration import ensure_calibration
 
     figures: dict = {"method": method, "pose": pose, "jobs_per_task": jobs}
@@ -52,7 +57,8 @@ def run_jobs_benchmark(jobs: int = 20, method: str = "nift", pose: str = "uprigh
         try:
             for name in tasks:
                 specs = [JobSpec(task(name), seed + i, pose) for i in range(jobs)]
-                results = run_series(cell, scene, T_cam, specs, JobConfig(method=method), progress)
+                results = run_series(cell, scene, T_cam, specs, JobConfig(method=method, second_look=second_look),
+                                      progress)
                 figures.update(summarise(name, results))
                 every += [r.record() for r in results]
         finally:

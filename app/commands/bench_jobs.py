@@ -5,7 +5,7 @@ import argparse
 from pathlib import Path
 
 from app.categories import POSES
-from app.console.options import add_config_argument
+from app.console.options import add_config_argument, add_second_look_argument
 from app.console.output import print_figures
 
 NAME = "bench-jobs"
@@ -25,6 +25,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="camera calibration file; if missing, the cell is calibrated first and it is written")
     p.add_argument("--json", action="store_true", help="print the figures as JSON")
     p.add_argument("--records", type=Path, default=None, help="also write every job's record (a JSON list) to this file")
+    add_second_look_argument(p)
     add_config_argument(p)
 
 
@@ -41,6 +42,6 @@ def run(args: argparse.Namespace) -> int:
         raise ValueError(f"--jobs must be at least 1, got {jobs}")
     with tqdm(total=jobs * len(tasks), unit="job", desc="bench-jobs") as bar:
         figures = run_jobs_benchmark(jobs, args.method, args.pose, args.seed, tasks, cell_config(args), args.calibration,
-                                     lambda r: bar.update(1), args.records)
+                                     lambda r: bar.update(1), args.records, args.second_look)
     print_figures(figures, args.json)
     return 0

@@ -6,7 +6,7 @@ import json
 from pathlib import Path
 
 from app.categories import POSES
-from app.console.options import add_config_argument
+from app.console.options import add_config_argument, add_second_look_argument
 
 NAME = "run"
 HELP = "run pick-and-place jobs in the sim cell: capture, imitate, plan, grasp, carry, place, verify"
@@ -29,6 +29,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="camera calibration file; if missing, the cell is calibrated first and it is written")
     p.add_argument("--gui", action="store_true", help="show the PyBullet window")
     p.add_argument("--json", action="store_true", help="print the result records as JSON")
+    add_second_look_argument(p)
     add_config_argument(p)
 
 
@@ -49,7 +50,7 @@ def run(args: argparse.Namespace) -> int:
         raise ValueError(f"--record {args.record}: key frames are written as a PNG strip; give a .png path")
     t = task(args.task)
     specs = [JobSpec(t, args.seed + i, args.pose) for i in range(args.jobs)]
-    config = JobConfig(method=args.method, demos=args.demos)
+    config = JobConfig(method=args.method, demos=args.demos, second_look=args.second_look)
     cell_cfg = cell_config(args, gui=args.gui)
     bar = tqdm(total=len(specs), unit="job", desc=f"nift run {t.name}", disable=len(specs) == 1 or args.json)
     done = []
@@ -93,6 +94,8 @@ def _print_one(r) -> None:
         print(f"  {name} TCP [x y z rx ry rz]: {pose}")
     if r.seen:
         print(f"  camera: {r.seen}")
+    if r.look:
+        print("  second look: " + ", ".join(f"{k} {v}" for k, v in r.look.items()))
     if len(r.attempts) > 1:
         print("  attempts: " + "; ".join(f"{a['attempt']}: {a['outcome']}" for a in r.attempts))
     print(f"  arm: {r.arm}")

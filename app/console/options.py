@@ -56,3 +56,10 @@ def imitation_config(args: argparse.Namespace):
                            grasp_contact_scale=args.grasp_contact_scale,
                            place_contact_scale=args.place_contact_scale, place_demo_match=args.place_demo_match,
                            seed=args.seed)
+
+
+def add_second_look_argument(p: argparse.ArgumentParser) -> None:
+    """--second-look: the job's second look at the held object (`app.jobs.second_look`)."""
+    p.add_argument("--second-look", action="store_true",
+                   help="after the lift, show the held object to the camera and imitate the place again from both "
+                        "views (template methods; off by default, see docs/jobs.md)")

@@ -28,6 +28,7 @@ import numpy as np
 
 from app.jobs.check import placed
 from app.jobs.choice import NoCandidate, choose, describe
+from app.jobs.second_look import SecondLookConfig, second_look
 from app.motion.executor import (OBJECT, ExecutionError, ExecutorConfig,
                                  Planner, execute, reverse)
 from app.motion.ik import NoIKSolution, reach_failure
@@ -35,8 +36,11 @@ from app.motion.scene import PlanningScene
 from app.nift.candidates import CandidateConfig
 from app.nift.imitate import ImitationConfig, use_threads
 from app.perception import PerceptionConfig, object_cloud
+from app.predict.candidates import Candidate
 from app.predict.grasp_centering import held_width
-from app.predict.predict import Prediction, predict
+from app.predict.methods import QUERY_FEATURE
+from app.predict.predict import (Prediction, predict, predict_place,
+                                 refine_grasp)
 from app.predict.table_clearance import backed_off_table
 from app.tasks.task import Task
 from hardware.interfaces import Arm, DepthCamera, Frame, Gripper
@@ -44,7 +48,9 @@ from hardware.kinematics import UR5Kinematics
 from hardware.se3 import pose_to_ur, transform_points, ur_to_pose
 
 Predictor = Callable[[np.ndarray], Prediction]  # object cloud (N, 3), base frame -> grasp and place
-STAGES = ("capture", "perceive", "imitate", "plan", "approach", "grasp", "lift", "recover", "carry", "place",
+# the held object's cloud as it stood when grasped, the grasp, places to start from -> place candidates
+Placer = Callable[[np.ndarray, np.ndarray, np.ndarray], list[Candidate]]
+STAGES = ("capture", "perceive", "imitate", "plan", "approach", "grasp", "lift", "recover", "look", "carry", "place",
           "release", "retreat", "verify")
 # The cell's imitation schedule: prune every 10 steps down to 3 poses, one per basin, explore on 128
 # points and refine on 256, leave out points of negligible weight, stop after 25 steps without gain,
@@ -68,7 +74,11 @@ class JobConfig:
     # one Kinect's normals at a rim are too far off (docs/additions.md, "Grasp alignment")
     feasible: bool = True  # prefer grasps that close on something and places the grasp can carry to
     # (app.predict.feasibility); what the cell can reach is chosen among the candidates (app.jobs.choice)
+    carried_grasps: bool = True  # also try the demos' grasps carried from each place (app.predict.carried_grasps)
     table_z: float = 0.0  # m, the table top in the base frame (the cell's layout)
+    second_look: bool = False  # show the held object to the camera and imitate the place again (app.jobs.second_look):
+    # off, as on seeds 0-9 it hung no more mugs (0/10) and cost bowls (10/10 -> 7/10; docs/jobs.md)
+    look: SecondLookConfig = SecondLookConfig()
     attempts: int = 3  # grasps tried before the job gives up
     most_plans: int = 6  # full plans tried per attempt before the plan stage gives up
     threads: int = 1  # torch threads: two threads beside one busy process took 2.5x as long as one (docs/jobs.md)
@@ -122,6 +132,7 @@ class JobResult:
     seen: str = ""  # the job's own camera check after the release (`app.jobs.check`)
     candidates: list[dict] = field(default_factory=list)  # every pair the plan stage looked at (`choice.describe`)
     attempts: list[dict] = field(default_factory=list)  # one per grasp: its candidate and the outcome
+    look: dict = field(default_factory=dict)  # the second look: points seen, the place it chose, how far it moved
     info: dict = field(default_factory=dict)  # the cell's own facts (object, seed, ...)
 
     def record(self) -> dict:
@@ -129,7 +140,7 @@ class JobResult:
         return {"task": self.task, "method": self.method, "success": self.success, "failed_stage": self.failed_stage,
                 "reason": self.reason, "seconds": self.seconds, "total_seconds": round(sum(self.seconds.values()), 3),
                 "poses": self.poses, "plan": self.plan, "arm": self.arm, "seen": self.seen, "candidates": self.candidates,
-                "attempts": self.attempts, **self.info}
+                "attempts": self.attempts, "look": self.look, **self.info}
 
 
 @contextmanager
@@ -153,17 +164,26 @@ def run_job(t: Task, arm: Arm, gripper: Gripper, camera: DepthCamera, T_base_cam
             hooks: JobHooks | None = None, predictor: Predictor | None = None) -> JobResult:
     """Run one pick-and-place job of task t; never raises for a failed stage - it is in the result.
 
-    `predictor(cloud)` gives the grasp and place; by default the configured method on the task's demos."""
+    `predictor(cloud)` gives the grasp and place; by default the configured method on the task's demos.
+    A template method (not cpd, not the oracle) imitates the place again after the second look
+    (`config.second_look`)."""
     hooks = hooks or JobHooks()
     result = JobResult(t.name, config.method)
     use_threads(config.threads)
     kin = UR5Kinematics(tcp_offset=ur_to_pose(arm.getTCPOffset()))
+    placer = None
+    if config.second_look and config.method in QUERY_FEATURE + ("nift",):
+        def placer(cloud: np.ndarray, T_grasp: np.ndarray, starts: np.ndarray) -> list[Candidate]:
+            return predict_place(t, cloud, T_grasp, config.method, T_base_fixture, config.demos, config.imitation,
+                                 starts, center=config.center_grasp)
     if predictor is None:
         def predictor(cloud: np.ndarray) -> Prediction:
             return predict(t, cloud, config.method, T_base_fixture, config.demos, config.imitation,
-                           center=config.center_grasp, feasible=config.feasible, align=config.align_grasp)
+                           center=config.center_grasp, feasible=config.feasible, align=config.align_grasp,
+                           reachable=gripper_clear(scene, cloud, config), carried_grasps=config.carried_grasps)
     try:
-        _run(_Job(t, arm, gripper, camera, T_base_cam, T_base_fixture, scene, kin, config, hooks, predictor, result))
+        _run(_Job(t, arm, gripper, camera, T_base_cam, T_base_fixture, scene, kin, config, hooks, predictor, result,
+                  placer))
         result.arm = "home"
     except JobFailed as exc:
         result.reason = str(exc)
@@ -171,6 +191,17 @@ def run_job(t: Task, arm: Arm, gripper: Gripper, camera: DepthCamera, T_base_cam
     finally:
         scene.remove(OBJECT)
     return result
+
+
+def gripper_clear(scene: PlanningScene, cloud: np.ndarray, config: JobConfig) -> Callable[[np.ndarray], bool]:
+    """Grasp pose (4, 4) -> whether the open gripper there, refined and backed off the table as the
+    job will do it, hits nothing of the cell (table, fixtures): the imitation's pruning keeps such
+    grasps before others (a grasp from under the table or through it is no grasp for a cell)."""
+    def clear(T_base_tcp: np.ndarray) -> bool:
+        T = refine_grasp(T_base_tcp, cloud, center=config.center_grasp, align=config.align_grasp)
+        return not scene.gripper_collisions(backed_off_table(T, cloud, config.table_z), ignore=(OBJECT,))
+
+    return clear
 
 
 @dataclass
@@ -189,6 +220,7 @@ class _Job:
     hooks: JobHooks
     predictor: Predictor
     result: JobResult
+    placer: Placer | None = None  # imitates the place again after the second look (None: no second look)
     first: Frame | None = None  # the first frame: the fixture without the object
 
     def stage(self, name: str):
@@ -217,6 +249,8 @@ def _run(job: _Job) -> None:
         job.result.attempts.append({"attempt": attempt, **describe(chosen, "held")})
         job.result.failed_stage = None
         break
+    if job.placer is not None:
+        plan, sent = _look(job, planner, plan, chosen, options, cloud)
     _place(job, plan, sent)
 
 
@@ -294,6 +328,43 @@ def _recover(job: _Job, planner: Planner, plan) -> None:
         job.scene.remove(OBJECT)  # it may have moved; the next look adds it again
         home = np.asarray(job.config.executor.home_q)
         execute(job.arm, planner.transit(job.arm.getActualQ(), home, "recover"), tolerance)
+
+
+def _look(job: _Job, planner: Planner, plan, chosen: Candidate, options: list, cloud: np.ndarray):
+    """The second look (`app.jobs.second_look`): show the held object, imitate the place again on both
+    views, and plan the rest from where the arm is - with the first pair's place when no new one plans.
+    Returns the plan to carry on with and where the object should end (`sent`)."""
+    T_grasp, width = plan.T_base_grasp, job.gripper.width
+    held, released = width, width + job.config.release_clearance
+    direction = job.t.place_direction(job.T_base_fixture)
+    with job.stage("look"):
+        try:
+            fused, new = second_look(job.arm, job.camera, planner, job.T_base_cam, cloud, T_grasp, width,
+                                     job.config.executor.end_tolerance, job.config.look, job.config.perception)
+        except (ValueError, NoIKSolution) as exc:  # nothing seen, or no way to show it: go on with the first look
+            job.result.look = {"used": False, "why": str(exc)}
+            return _replanned(job, planner, plan, chosen, cloud, (held, released), direction)
+        starts = np.stack([c.T_base_fixture_seen for c in options if c.grasp_rank == chosen.grasp_rank])
+        q, why = job.arm.getActualQ(), "no place"
+        for c in job.placer(fused, T_grasp, starts)[: job.config.most_plans]:
+            try:
+                rest = planner.place_from(q, T_grasp, c.motion @ T_grasp, direction, (held, released))
+            except NoIKSolution as exc:
+                why = str(exc)
+                continue
+            moved = float(np.linalg.norm(rest.T_base_place[:3, 3] - plan.T_base_place[:3, 3]))
+            job.result.look = {"used": True, "new_points": new, "place_rank": c.place_rank,
+                               "place_moved_m": round(moved, 4)}
+            job.result.poses["place"] = _ur(rest.T_base_place)
+            return rest, transform_points(c.motion, cloud)
+        job.result.look = {"used": False, "new_points": new, "why": why}
+        return _replanned(job, planner, plan, chosen, cloud, (held, released), direction)
+
+
+def _replanned(job: _Job, planner: Planner, plan, chosen: Candidate, cloud: np.ndarray, widths, direction):
+    """The first look's place, planned again from where the arm is now."""
+    rest = planner.place_from(job.arm.getActualQ(), plan.T_base_grasp, plan.T_base_place, direction, widths)
+    return rest, transform_points(chosen.motion, cloud)
 
 
 def _place(job: _Job, plan, sent: np.ndarray) -> None:

@@ -139,16 +139,33 @@ class Planner:
 
     def _pick_place(self, q_start, T_grasp, T_place, place_direction, widths) -> PickPlacePlan:
         c = self.config
-        held, released = widths or (self.scene.geometry.stroke, self.scene.geometry.stroke)
         T_pre_grasp = T_grasp @ make_pose(t=[0.0, 0.0, -c.approach_distance])
         T_lift = make_pose(T_grasp[:3, :3], T_grasp[:3, 3] + [0.0, 0.0, c.lift_height])
-        T_pre_place = make_pose(T_place[:3, :3], T_place[:3, 3] + c.place_distance * np.asarray(place_direction))
-        T_retreat = T_place @ make_pose(t=[0.0, 0.0, -c.retreat_distance])
         # IK at the ends of the lines first: they decide the configuration each line runs in
         approach, lift = self._first(solutions(self.kin, T_grasp, q_start, self.scene, c.ik, (OBJECT,), "grasp"),
                                      lambda q: (reverse(self.line(q, T_pre_grasp, "approach", (OBJECT,))),
                                                 self.line(q, T_lift, "lift", (OBJECT,))))
         to_pre_grasp = self.transit(q_start, approach.q[0], "to pre-grasp")
+        segments = [to_pre_grasp, approach, lift, *self._place_segments(lift.end, T_grasp, T_place, place_direction,
+                                                                        widths)]
+        travel = float(sum(np.abs(np.diff(s.q, axis=0)).sum() for s in segments))
+        return PickPlacePlan(segments, T_grasp, T_place, travel=travel)
+
+    def place_from(self, q_now: np.ndarray, T_base_grasp: np.ndarray, T_base_place: np.ndarray,
+                   place_direction: np.ndarray, widths: tuple[float, float] | None = None) -> PickPlacePlan:
+        """The rest of a job from q_now with the object held as grasped at T_base_grasp (no half-turn:
+        the grasp is made): carry, place, retreat, clear, home (`pick_place` for the arguments)."""
+        start = time.perf_counter()
+        segments = self._place_segments(q_now, T_base_grasp, T_base_place, place_direction, widths)
+        travel = float(sum(np.abs(np.diff(s.q, axis=0)).sum() for s in segments))
+        return PickPlacePlan(segments, T_base_grasp, T_base_place, time.perf_counter() - start, travel)
+
+    def _place_segments(self, q_from, T_grasp, T_place, place_direction, widths) -> list[JointTrajectory]:
+        """carry (from q_from, the object held), place, retreat, clear, home."""
+        c = self.config
+        held, released = widths or (self.scene.geometry.stroke, self.scene.geometry.stroke)
+        T_pre_place = make_pose(T_place[:3, :3], T_place[:3, 3] + c.place_distance * np.asarray(place_direction))
+        T_retreat = T_place @ make_pose(t=[0.0, 0.0, -c.retreat_distance])
 
         def place_lines(q: np.ndarray):
             with self.scene.fingers(held):
@@ -157,18 +174,16 @@ class Planner:
                 return place, self.line(q, T_retreat, "retreat", (OBJECT,))
 
         with self.scene.fingers(held):
-            at_place = solutions(self.kin, T_place, lift.end, self.scene, c.ik, (OBJECT,), "place")
+            at_place = solutions(self.kin, T_place, q_from, self.scene, c.ik, (OBJECT,), "place")
         place, retreat = self._first(at_place, place_lines)
         with self.scene.holding(OBJECT, T_grasp), self.scene.fingers(held):  # the carried object must clear the cell too
-            carry = self.transit(lift.end, place.q[0], "carry", ignore=(OBJECT,))
+            carry = self.transit(q_from, place.q[0], "carry", ignore=(OBJECT,))
         T_clear = self.kin.fk(retreat.end)
         T_clear[2, 3] += c.lift_height
         with self.scene.fingers(released):
             clear = self.line(retreat.end, T_clear, "clear", ignore=(OBJECT,))
             home = self.transit(clear.end, np.asarray(c.home_q), "home", ignore=(OBJECT,))
-        segments = [to_pre_grasp, approach, lift, carry, place, retreat, clear, home]
-        travel = float(sum(np.abs(np.diff(s.q, axis=0)).sum() for s in segments))
-        return PickPlacePlan(segments, T_grasp, T_place, travel=travel)
+        return [carry, place, retreat, clear, home]
 
     def _first(self, candidates: list[np.ndarray], plan_lines):
         """plan_lines(q) for the first IK candidate (of at most `ik_candidates`) whose lines work."""

@@ -64,13 +64,6 @@ def solve(kin: UR5Kinematics, T_base_tcp: np.ndarray, q_current: np.ndarray, sce
     return solutions(kin, T_base_tcp, q_current, scene, config, ignore, what)[0]
 
 
-def reach_check(kin: UR5Kinematics, scene: PlanningScene, q_current: np.ndarray, ignore: tuple[str, ...] = (),
-                random_seeds: int = 6):
-    """A quick test of TCP poses for ranking candidates, pose (4, 4) -> bool (`reach_failure` is None)."""
-    failure = reach_failure(kin, scene, q_current, ignore, random_seeds)
-    return lambda T_base_tcp: failure(T_base_tcp) is None
-
-
 def reach_failure(kin: UR5Kinematics, scene: PlanningScene, q_current: np.ndarray, ignore: tuple[str, ...] = (),
                   random_seeds: int = 6):
     """A quick test of TCP poses, pose (4, 4) -> why the cell cannot put its TCP there, or None: the

@@ -197,9 +197,11 @@ def frozen(module: torch.nn.Module):
 
 
 def imitate(template: Template, cloud: np.ndarray, config: ImitationConfig = ImitationConfig(),
-            field: NeuralField | None = None, feasible: Feasible | None = None) -> Imitation:
+            field: NeuralField | None = None, feasible: Feasible | None = None,
+            starts: np.ndarray | None = None) -> Imitation:
     """Optimise Eq. 5 for a target cloud (N, 3); `field` defaults to the template's shipped field;
-    `feasible` (optional) rules poses out, see the module doc."""
+    `feasible` (optional) rules poses out, see the module doc; `starts` (I, 4, 4), optional: anchor
+    poses to start from, beside the `config.inits` random ones."""
     cloud = np.asarray(cloud, dtype=np.float64)
     if cloud.ndim != 2 or cloud.shape[1] != 3 or len(cloud) < 16:
         raise ValueError(f"the target cloud must be (N, 3) with N >= 16, got shape {cloud.shape}")
@@ -208,7 +210,7 @@ def imitate(template: Template, cloud: np.ndarray, config: ImitationConfig = Imi
     start = time.perf_counter()
     field = field or load_field(FEATURES[template.feature])
     with frozen(field):
-        return _optimise(template, cloud, config, field, start, feasible)
+        return _optimise(template, cloud, config, field, start, feasible, starts)
 
 
 def _poses(r6: torch.Tensor, t: torch.Tensor, c_X: torch.Tensor, c_O: torch.Tensor) -> np.ndarray:
@@ -239,17 +241,31 @@ def symmetries_of(template: Template) -> tuple[np.ndarray, ...]:
     return (np.eye(4), HALF_TURN_Z) if template.anchor == "gripper" else IDENTITY
 
 
+def _initial(config: ImitationConfig, rng: np.random.Generator, c_X: torch.Tensor, c_O: torch.Tensor,
+             starts: np.ndarray | None) -> tuple[torch.Tensor, torch.Tensor]:
+    """Initial (R (I, 3, 3), t (I, 3)): `config.inits` random ones (module doc), then one per start
+    pose S (R = S_R, t = S_t - c_O + R c_X, so that T = S)."""
+    R0 = torch.as_tensor(random_rotations(config.inits, rng), dtype=torch.float32)
+    t0 = torch.as_tensor(rng.uniform(-config.init_translation, config.init_translation, (config.inits, 3)),
+                         dtype=torch.float32)
+    if starts is None or len(starts) == 0:
+        return R0, t0
+    S = torch.as_tensor(np.asarray(starts)[:, :3], dtype=torch.float32)  # (S, 3, 4)
+    tS = S[:, :, 3] - c_O + torch.einsum("sab,b->sa", S[:, :, :3], c_X)
+    return torch.cat([R0, S[:, :, :3]]), torch.cat([t0, tS])
+
+
 def _optimise(template: Template, cloud: np.ndarray, config: ImitationConfig, field: NeuralField,
-              start: float, feasible: Feasible | None = None) -> Imitation:
+              start: float, feasible: Feasible | None = None, starts: np.ndarray | None = None) -> Imitation:
     """The loop of `imitate` (the field's parameters frozen)."""
     symmetries = symmetries_of(template)
     rng = np.random.default_rng(config.seed)
     X, target, w = targets_and_weights(template, config)  # (M, 3), (D, M, F), (M,) sum 1
     c_X, c_O = X.mean(dim=0), torch.as_tensor(cloud.mean(axis=0), dtype=torch.float32)
-    R0 = torch.as_tensor(random_rotations(config.inits, rng), dtype=torch.float32)
+    R0, t0 = _initial(config, rng, c_X, c_O, starts)
+    inits = len(R0)
     r6 = rotation_to_6d(R0).requires_grad_(True)  # (I, 6)
-    t = torch.as_tensor(rng.uniform(-config.init_translation, config.init_translation, (config.inits, 3)),
-                        dtype=torch.float32).requires_grad_(True)  # (I, 3)
+    t = t0.clone().requires_grad_(True)  # (I, 3)
     opt = torch.optim.Adam([r6, t], lr=config.lr)
     with torch.no_grad():
         latent = field.encode(cloud)
@@ -262,13 +278,13 @@ def _optimise(template: Template, cloud: np.ndarray, config: ImitationConfig, fi
         x = torch.einsum("iab,mb->ima", R, Xs - c_X) + c_O + t[:, None]  # (I, M, 3)
         return eq5(point_features(field, feature, latent, x), target_s, ws)
 
-    exploring = bool(config.prune_every) and config.inits > config.keep and 0 < config.explore_points < len(X)
+    exploring = bool(config.prune_every) and inits > config.keep and 0 < config.explore_points < len(X)
     rows = torch.as_tensor(rng.choice(len(X), config.explore_points, replace=False)) if exploring else None
     refine = (torch.as_tensor(rng.choice(len(X), config.refine_points, replace=False))
               if exploring and 0 < config.refine_points < len(X) else None)  # None: refine on every point
-    alive = torch.arange(config.inits)  # original index of each row still optimised
+    alive = torch.arange(inits)  # original index of each row still optimised
     final_r6, final_t = r6.detach().clone(), t.detach().clone()
-    best = torch.full((config.inits,), float("inf"))
+    best = torch.full((inits,), float("inf"))
     stale, iterations = 0, 0
     for iterations in range(1, config.iterations + 1):
         for group in opt.param_groups:  # cosine decay to lr_final: fine steps at the end

@@ -31,13 +31,13 @@ import numpy as np
 from app.layout import CellLayout
 from app.nift.cpd import best_registration
 from app.nift.field import load_field
-from app.nift.imitate import ImitationConfig, imitate
+from app.nift.imitate import ImitationConfig, imitate, losses_at, symmetries_of
 from app.nift.template import FEATURES, field_override
 from app.objects import fixture
-from app.predict.candidates import Candidate, ranked_pairs
+from app.predict.candidates import Candidate, excess, ranked_pairs
+from app.predict.carried_grasps import carried_pairs, carried_places
 from app.predict.feasibility import (Reach, all_of, carries_like_demos,
-                                     grips_something, reaches,
-                                     reaches_at_place)
+                                     grips_something, reaches)
 from app.predict.grasp_alignment import align_grasp
 from app.predict.grasp_centering import center_grasp
 from app.predict.methods import check_method
@@ -87,15 +87,17 @@ class Prediction:
 def predict(t: Task, cloud: np.ndarray, method: str = "nift", T_base_fixture: np.ndarray | None = None,
             directory: Path | None = None, config: ImitationConfig = ImitationConfig(),
             nif: str | Path | None = None, center: bool = True, feasible: bool = True,
-            reachable: Reach | None = None, align: bool = False) -> Prediction:
+            reachable: Reach | None = None, align: bool = False, carried_grasps: bool = False) -> Prediction:
     """Grasp pose and place motion for a target cloud (N, 3) in the base frame (`nif`: other field
     weights, a NIF file or a directory of nif.pt and ndf.pt (`field_override`), default the shipped
     ones; `center`: centre the grasp on the points between the fingers and a hang on the peg,
     `app.predict.grasp_centering` and `app.predict.peg_centering`; `feasible`: prefer feasible poses,
-    `app.predict.feasibility`; `reachable`: whether the cell can put its TCP at a pose - given, a template
-    method's feasible grasps and places are also ones it can reach; `align`: turn the grasp so the
-    fingers close along the normal of the wall between them, `app.predict.grasp_alignment`)."""
-    pred = _predict(t, cloud, method, T_base_fixture, directory, config, nif, feasible, reachable)
+    `app.predict.feasibility`; `reachable`: whether the cell can put its gripper at a grasp pose - given,
+    a template method's feasible grasps are also ones it can reach; `align`: turn the grasp so the
+    fingers close along the normal of the wall between them, `app.predict.grasp_alignment`; `carried_grasps`:
+    template methods also pair each place candidate with the demos' grasps carried from it,
+    `app.predict.carried_grasps`)."""
+    pred = _predict(t, cloud, method, T_base_fixture, directory, config, nif, feasible, reachable, carried_grasps)
     pred.T_base_tcp = refine_grasp(pred.T_base_tcp, cloud, center=center, align=align)
     if center:
         seen = center_on_peg(pred.T_base_fixture_seen, cloud, fixture(t.fixture))
@@ -127,7 +129,7 @@ def refine_grasp(T_base_tcp: np.ndarray, cloud: np.ndarray, *, center: bool, ali
 
 def _predict(t: Task, cloud: np.ndarray, method: str, T_base_fixture: np.ndarray | None, directory: Path | None,
              config: ImitationConfig, nif: str | Path | None, feasible: bool = True,
-             reachable: Reach | None = None) -> Prediction:
+             reachable: Reach | None = None, carried_grasps: bool = False) -> Prediction:
     """`predict` before the grasp is centred."""
     key = check_method(method)
     directory = directory or DEMOS_DIR / t.demos
@@ -145,14 +147,47 @@ def _predict(t: Task, cloud: np.ndarray, method: str, T_base_fixture: np.ndarray
     carry, carried = None, None
     if feasible:
         carried = [invert(d.place_anchor()) @ d.T_base_tcp for d in task_demos(directory)]  # each demo's T_fixture_tcp
-        carry = all_of(carries_like_demos(grasp.T, carried),
-                       reaches_at_place(reach, T_base_fixture, grasp.T) if reach else None)
-    place = imitate(templates["place"], cloud, config, field, carry)
+        carry = carries_like_demos(grasp.T, carried)
+    demos_carried = carried or [invert(d.place_anchor()) @ d.T_base_tcp for d in task_demos(directory)]
+    starts = carried_places(grasp.candidates, demos_carried) if carried_grasps else None
+    place = imitate(templates["place"], cloud, config, field, carry, starts)
+    pairs = ranked_pairs(grasp, place, T_base_fixture, carried)
+    if carried_grasps:
+        pairs += carried_pairs(grasp, place, T_base_fixture, demos_carried,
+                               lambda G: losses_at(templates["grasp"], cloud, G, config, field), grips,
+                               symmetries_of(templates["grasp"]), config.candidates, len(grasp.candidates))
+        pairs.sort(key=lambda c: c.score)
     return Prediction(method, grasp.T, place.T, T_base_fixture @ invert(place.T),
                       {"grasp": grasp.losses.round(5).tolist(), "place": place.losses.round(5).tolist()},
                       {"grasp": grasp.iterations, "place": place.iterations},
-                      {"grasp": round(grasp.seconds, 3), "place": round(place.seconds, 3)},
-                      ranked_pairs(grasp, place, T_base_fixture, carried))
+                      {"grasp": round(grasp.seconds, 3), "place": round(place.seconds, 3)}, pairs)
+
+
+def predict_place(t: Task, cloud: np.ndarray, T_base_tcp: np.ndarray, method: str = "nift",
+                  T_base_fixture: np.ndarray | None = None, directory: Path | None = None,
+                  config: ImitationConfig = ImitationConfig(), starts: np.ndarray | None = None,
+                  center: bool = True) -> list[Candidate]:
+    """Place candidates, best first, for an object held by the grasp T_base_tcp, from a cloud (N, 3) of
+    it as it stood when grasped (the second look's fused cloud, `app.jobs.second_look`): the place
+    template imitated from random starts, from the demo's carry of this grasp
+    (`app.predict.carried_grasps.carried_places`) and from `starts` (K, 4, 4), the places that carry
+    like the demos with this grasp preferred; none for a method without templates (cpd)."""
+    key = check_method(method)
+    if key == "cpd":
+        return []
+    directory = directory or DEMOS_DIR / t.demos
+    T_base_fixture = CellLayout().fixture_pose(t.fixture) if T_base_fixture is None else T_base_fixture
+    query, feature = key.split("-")
+    template = task_templates(t, directory, query, feature)["place"]
+    carried = [invert(d.place_anchor()) @ d.T_base_tcp for d in task_demos(directory)]
+    begin = carried_places(T_base_tcp[None], carried)
+    begin = begin if starts is None or len(starts) == 0 else np.concatenate([begin, starts])
+    place = imitate(template, cloud, config, None, carries_like_demos(T_base_tcp, carried), begin)
+    ok = place.feasible[place.ranked] if place.feasible is not None else np.ones(len(place.ranked), bool)
+    sp = excess(place.candidate_losses)
+    peg = fixture(t.fixture)
+    return [Candidate(T_base_tcp, center_on_peg(P, cloud, peg) if center else P, T_base_fixture, float(sp[j]), 0, j)
+            for j, P in enumerate(place.candidates) if ok[j]]
 
 
 def _predict_cpd(method: str, t: Task, cloud: np.ndarray, T_base_fixture: np.ndarray, directory: Path) -> Prediction:

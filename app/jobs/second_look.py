@@ -1,0 +1,71 @@
+"""The second look at the held object (our addition, as a person at the cell would do it): after the
+lift the cell shows what it holds to the Kinect from the side the first view missed - a mug's far
+side, where its handle may be - and imitates the place again from both views.
+
+The view: the wrist's last joint turns the held object by `turns` about the tool axis; the TCP stays
+where the lift left it, over the table and in the camera's view. Perception keeps the points near
+where the object now is, less the gripper's own (its boxes at the forward-kinematics pose,
+`app.perception.held_object_cloud`). The object is rigid in the grasp, so a point x seen with the
+TCP at T_view stood at
+
+    x_0 = T_grasp @ inv(T_view) @ x                  (exact up to slip)
+
+when the object was first seen: both views are fused in that frame and resampled to the first
+cloud's size, and `app.predict.predict.predict_place` imitates the place on the fused cloud.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from app.motion.executor import OBJECT, Planner, execute
+from app.perception import PerceptionConfig, held_object_cloud, resample
+from hardware.interfaces import Arm, DepthCamera, JointLimits
+from hardware.se3 import invert, transform_points
+
+
+@dataclass(frozen=True)
+class SecondLookConfig:
+    """Where the held object is shown from, and how its points are told from the gripper's."""
+
+    turns: tuple[float, ...] = (np.pi,)  # rad on the wrist's last joint from the lift's end, one view each
+    reach: float = 0.03  # m the crop reaches beyond the first cloud's extent
+    gripper_margin: float = 0.01  # m: points this close to the gripper's boxes are the gripper's
+
+
+def view_q(q: np.ndarray, turn: float, limits: JointLimits) -> np.ndarray:
+    """q with the last joint turned by `turn`, or by -turn when that one leaves the joint's limits."""
+    for signed in (turn, -turn):
+        out = np.array(q, float)
+        out[5] += signed
+        if limits.contains(out):
+            return out
+    raise ValueError(f"the wrist cannot turn by {turn:.2f} rad either way from {q[5]:.2f} rad")
+
+
+def to_grasp_frame(points: np.ndarray, T_base_grasp: np.ndarray, T_base_view: np.ndarray) -> np.ndarray:
+    """(M, 3) points seen with the TCP at T_base_view, where they stood with the TCP at the grasp."""
+    return transform_points(T_base_grasp @ invert(T_base_view), points)
+
+
+def second_look(arm: Arm, camera: DepthCamera, planner: Planner, T_base_cam: np.ndarray, first: np.ndarray,
+                T_base_grasp: np.ndarray, width: float, tolerance: float,
+                config: SecondLookConfig = SecondLookConfig(),
+                perception: PerceptionConfig = PerceptionConfig()) -> tuple[np.ndarray, int]:
+    """Show the held object from each view, return (the fused cloud (N, 3) in the grasp-time frame, the
+    count of new points); the arm is left at the last view. ValueError when a view shows nothing."""
+    start_q = arm.getActualQ()
+    radius = float(np.linalg.norm(first - first.mean(axis=0), axis=1).max()) + config.reach
+    views = []
+    for turn in config.turns:
+        q = view_q(start_q, turn, arm.joint_limits)
+        with planner.scene.holding(OBJECT, T_base_grasp), planner.scene.fingers(width):
+            execute(arm, planner.transit(arm.getActualQ(), q, "second look", ignore=(OBJECT,)), tolerance)
+        T_view = planner.kin.fk(arm.getActualQ())
+        near = transform_points(T_view @ invert(T_base_grasp), first[None].mean(axis=1))[0]
+        seen = held_object_cloud(camera.capture(), T_base_cam, T_view, width, near, radius, perception,
+                                 planner.scene.geometry, config.gripper_margin)
+        views.append(to_grasp_frame(seen, T_base_grasp, T_view))
+    fused = resample(np.concatenate([first, *views]), len(first), perception.seed)
+    return fused, int(sum(len(v) for v in views))
