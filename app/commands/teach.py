@@ -15,8 +15,12 @@ HELP = "record demos of a task (scripted teacher or your poses), verify them, re
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--task", required=True, choices=["mug", "bowl", "bottle"], help="which task to teach")
     p.add_argument("--demos", type=int, default=10, help="verified demos to record (default 10)")
-    p.add_argument("--out", type=Path, help="task directory (default demos/<task>); demos there are replaced")
-    p.add_argument("--poses", type=Path, help="JSON with your poses for ONE demo: {\"instance\": seed, "
+    p.add_argument("--out", type=Path, help="task directory (default demos/<task>)")
+    mode = p.add_mutually_exclusive_group()
+    mode.add_argument("--replace", action="store_true", help="the new demos take the place of those in --out")
+    mode.add_argument("--add", action="store_true", help="the new demos join those in --out")
+    p.add_argument("--poses", type=Path, help="JSON with your poses for ONE demo (added to the others unless "
+                   "--replace): {\"instance\": seed, "
                    "\"T_obj_tcp\": 4x4, \"T_fixture_obj\": 4x4}; default: the scripted teacher")
     p.add_argument("--rebuild", action="store_true", help="only rebuild the templates from the demos there")
     p.add_argument("--calibration", type=Path, default=Path("calibration.json"),
@@ -48,32 +52,37 @@ def run(args: argparse.Namespace) -> int:
     from app.sim.cell import SimCell
     from app.sim.teach import record_demo, record_task
     from app.tasks.library import DEMOS_DIR, task_demos, task_templates
+    from app.tasks.staging import demo_count, staged, teach_mode
     from app.tasks.task import task
 
     t = task(args.task)
     out = args.out or DEMOS_DIR / t.name
     log = (lambda line: print(line, file=sys.stderr)) if args.json else print
     recorded = []
-    if not args.rebuild:
-        with SimCell(cell_config(args)) as cell:
+    if args.rebuild:
+        templates = task_templates(t, out, rebuild=True)
+    else:
+        # one demo from a poses file joins the others unless --replace says otherwise
+        mode = teach_mode(out, args.replace, args.add or (args.poses is not None and not args.replace))
+        poses = read_poses(args.poses) if args.poses else None
+        with SimCell(cell_config(args)) as cell, staged(out, mode) as stage:
             from app.sim.calibration import ensure_calibration
 
             T_base_cam = ensure_calibration(cell, args.calibration)
-            if args.poses:
+            first = demo_count(stage)
+            if poses:
                 from app.tasks.demo import save_demo
 
-                instance, poses = read_poses(args.poses)
-                n = len(list(out.glob("demo-*.npz")))
-                demo, why = record_demo(cell, t, instance, T_base_cam, np.random.default_rng(args.seed), poses,
-                                        name=f"demo-{n:02d}")
+                instance, taught = poses
+                demo, why = record_demo(cell, t, instance, T_base_cam, np.random.default_rng(args.seed), taught,
+                                        name=f"demo-{first:02d}")
                 if demo is None:
                     raise ValueError(f"the demo was not kept: {why}")
-                recorded = [save_demo(demo, out / f"{demo.name}.npz")]
+                recorded = [save_demo(demo, stage / f"{demo.name}.npz")]
             else:
-                for old in out.glob("demo-*.npz"):
-                    old.unlink()
-                recorded = record_task(cell, t, args.demos, out, T_base_cam, args.seed, report=log)
-    templates = task_templates(t, out, rebuild=True)
+                recorded = record_task(cell, t, args.demos, stage, T_base_cam, args.seed, report=log, first=first)
+            templates = task_templates(t, stage, rebuild=True)  # in the staging folder: swapped in with the demos
+        recorded = [out / p.name for p in recorded]
     report = {"task": t.name, "directory": str(out), "recorded": [str(p) for p in recorded],
               "demos": len(task_demos(out)),
               "templates": {s: {"points": len(tp.points), "feature_dim": int(tp.features.shape[1])}

@@ -62,15 +62,15 @@ def record_demo(cell: SimCell, t: Task, seed: int, T_base_cam: np.ndarray, rng: 
 
 
 def record_task(cell: SimCell, t: Task, count: int, out: Path, T_base_cam: np.ndarray, seed: int = 0,
-                report: Callable[[str], None] = print) -> list[Path]:
-    """Record `count` verified demos with the scripted teacher into out/demo-NN.npz."""
+                report: Callable[[str], None] = print, first: int = 0) -> list[Path]:
+    """Record `count` verified demos with the scripted teacher into out/demo-NN.npz, numbered from `first`."""
     rng = np.random.default_rng(seed)
     candidates = rng.permutation(split(t.category, "train"))
     paths: list[Path] = []
     for instance in candidates:
         if len(paths) == count:
             break
-        name = f"demo-{len(paths):02d}"
+        name = f"demo-{first + len(paths):02d}"
         demo, why = record_demo(cell, t, int(instance), T_base_cam, rng, name=name)
         report(f"{t.name} instance {instance}: {why}")
         if demo is not None:

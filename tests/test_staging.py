@@ -1,0 +1,51 @@
+"""Teach-in writes that lose nothing: the staging folder swaps in whole, or not at all."""
+import pytest
+
+from app.cli import main
+from app.tasks.staging import demo_count, staged, teach_mode
+
+
+def _demos(directory, names):
+    directory.mkdir(parents=True, exist_ok=True)
+    for name in names:
+        (directory / f"{name}.npz").write_bytes(name.encode())
+
+
+def test_an_interrupted_session_leaves_the_demos_as_they_were(tmp_path):
+    out = tmp_path / "mug"
+    _demos(out, ["demo-00", "demo-01"])
+    with pytest.raises(KeyboardInterrupt):
+        with staged(out, "replace") as stage:
+            (stage / "demo-00.npz").write_bytes(b"new")
+            raise KeyboardInterrupt  # the operator's Ctrl-C half-way
+    assert sorted(p.name for p in out.iterdir()) == ["demo-00.npz", "demo-01.npz"]
+    assert (out / "demo-00.npz").read_bytes() == b"demo-00"
+    assert [p.name for p in tmp_path.iterdir()] == ["mug"]  # no staging folder left behind
+
+
+def test_replace_keeps_only_the_new_demos_and_add_keeps_both(tmp_path):
+    out = tmp_path / "mug"
+    _demos(out, ["demo-00", "demo-01"])
+    with staged(out, "add") as stage:
+        assert demo_count(stage) == 2  # the old ones are there to number after
+        (stage / "demo-02.npz").write_bytes(b"new")
+    assert sorted(p.name for p in out.iterdir()) == ["demo-00.npz", "demo-01.npz", "demo-02.npz"]
+    with staged(out, "replace") as stage:
+        (stage / "demo-00.npz").write_bytes(b"fresh")
+    assert [p.name for p in out.iterdir()] == ["demo-00.npz"] and (out / "demo-00.npz").read_bytes() == b"fresh"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["mug"]
+    with staged(tmp_path / "new" / "bowl", "replace") as stage:  # a directory that did not exist
+        (stage / "demo-00.npz").write_bytes(b"x")
+    assert demo_count(tmp_path / "new" / "bowl") == 1
+
+
+def test_teach_refuses_to_replace_demos_unasked_and_says_how(tmp_path, capsys):
+    out = tmp_path / "mug"
+    _demos(out, ["demo-00"])
+    with pytest.raises(ValueError, match="holds 1 demos: give --replace .* or --add"):
+        teach_mode(out, replace=False, add=False)
+    assert teach_mode(tmp_path / "empty", replace=False, add=False) == "replace"
+    assert main(["teach", "--task", "mug", "--out", str(out), "--demos", "1"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--replace" in err[0]
+    assert (out / "demo-00.npz").read_bytes() == b"demo-00"
