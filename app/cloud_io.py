@@ -7,6 +7,12 @@ import numpy as np
 import open3d as o3d
 
 SUFFIXES = (".ply", ".pcd", ".xyz", ".npy")
+# A cloud a task can use: enough distinct points for the imitation, an object's metric size (the
+# test split's mugs, bowls and bottles span 6-35 cm; a cup-sized margin each way), within the UR5's
+# reach of the base (0.85 m, with room for a calibration error)
+MIN_POINTS = 16
+EXTENT = (0.02, 0.8)  # m, the largest side of the cloud's bounding box
+REACH = 1.2  # m from the base frame's origin to the cloud's centroid
 
 
 def load_cloud(path: str | Path) -> np.ndarray:
@@ -31,6 +37,29 @@ def load_cloud(path: str | Path) -> np.ndarray:
         raise ValueError(f"{path}: the point cloud is empty")
     if not np.isfinite(cloud).all():
         raise ValueError(f"{path}: the point cloud contains NaN or inf")
+    return cloud
+
+
+def check_cloud(cloud: np.ndarray, name: str = "the cloud") -> np.ndarray:
+    """The cloud (N, 3) if an object cloud in metres in the base frame could be it, else a one-line
+    ValueError naming what is wrong: too few distinct points, millimetres (or another unit), a size
+    no object has, or a place beyond the arm's reach."""
+    distinct = len(np.unique(np.round(cloud, 6), axis=0))
+    if distinct < MIN_POINTS:
+        raise ValueError(f"{name} has {distinct} distinct points; imitation needs at least {MIN_POINTS}")
+    extent = float((cloud.max(axis=0) - cloud.min(axis=0)).max())
+    if extent > EXTENT[1]:
+        if EXTENT[0] <= extent / 1000 <= EXTENT[1]:
+            raise ValueError(f"{name} spans {extent:.4g} units, an object {extent / 1000:.3f} m across if they are "
+                             f"millimetres: give the cloud in metres")
+        raise ValueError(f"{name} spans {extent:.3g} m; an object cloud spans {EXTENT[0]}-{EXTENT[1]} m (metres expected)")
+    if extent < EXTENT[0]:
+        raise ValueError(f"{name} spans {extent * 1000:.1f} mm; an object cloud spans {EXTENT[0]}-{EXTENT[1]} m "
+                         f"(metres expected)")
+    distance = float(np.linalg.norm(cloud.mean(axis=0)))
+    if distance > REACH:
+        raise ValueError(f"{name} lies {distance:.2f} m from the robot's base, beyond the cell's {REACH} m "
+                         f"(is it in the base frame?)")
     return cloud
 
 

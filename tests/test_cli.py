@@ -128,3 +128,21 @@ def test_imitation_flags_out_of_range_end_in_one_line_before_any_work(tmp_path):
     out = nift("imitate", "--task", "mug", "--cloud", str(cloud), "--inits", "1000000")
     assert out.returncode == 2 and out.stderr.strip().count("\n") == 0
     assert "inits must be an integer in [1, 1000], got 1000000" in out.stderr
+
+
+@pytest.mark.parametrize("change, message", [
+    (lambda c: c * 1000.0, "if they are millimetres: give the cloud in metres"),
+    (lambda c: c + [20.0, 0.0, 0.0], "m from the robot's base"),
+    (lambda c: (c - c.mean(axis=0)) * 0.05 + c.mean(axis=0), "mm; an object cloud spans"),
+    (lambda c: c * 10.0, "m; an object cloud spans"),
+    (lambda c: np.repeat(c[:5], 50, axis=0), "5 distinct points"),
+])
+def test_imitate_refuses_a_cloud_no_object_in_the_cell_could_be_in_one_line(tmp_path, change, message):
+    """A demo's mug cloud in millimetres, 20 m away, shrunk to 5 mm, ten times too big or of 5 points."""
+    from app.tasks.library import DEMOS_DIR, task_demos
+
+    cloud = tmp_path / "cloud.npy"
+    np.save(cloud, change(task_demos(DEMOS_DIR / "mug")[0].cloud))
+    out = nift("imitate", "--task", "mug", "--cloud", str(cloud))
+    assert out.returncode == 2 and out.stderr.strip().count("\n") == 0, out.stderr
+    assert message in out.stderr and str(cloud) in out.stderr

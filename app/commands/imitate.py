@@ -33,13 +33,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from app.cloud_io import load_cloud
+    from app.cloud_io import check_cloud, load_cloud
     from app.console.options import imitation_config
     from app.predict.predict import predict
     from app.tasks.task import task
     from hardware.se3 import pose_to_ur
 
-    cloud = load_cloud(args.cloud)
+    cloud = check_cloud(load_cloud(args.cloud), str(args.cloud))
     pred = predict(task(args.task), cloud, args.method, directory=args.demos, config=imitation_config(args),
                    center=args.center_grasp, feasible=args.feasible, align=args.align_grasp)
     if args.json:
