@@ -49,3 +49,20 @@ def test_teach_refuses_to_replace_demos_unasked_and_says_how(tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "--replace" in err[0]
     assert (out / "demo-00.npz").read_bytes() == b"demo-00"
+
+
+def test_a_bowl_demo_in_the_mug_folder_is_refused_before_any_template_is_built(tmp_path):
+    import shutil
+
+    from app.tasks.library import DEMOS_DIR
+    out = tmp_path / "mug"
+    out.mkdir()
+    for name in ("demo-00.npz", "demo-01.npz"):
+        shutil.copy(DEMOS_DIR / "mug" / name, out / name)
+    shutil.copy(DEMOS_DIR / "bowl" / "demo-00.npz", out / "demo-02.npz")
+    assert main(["teach", "--task", "mug", "--rebuild", "--out", str(out)]) == 2
+    assert sorted(p.name for p in out.iterdir()) == ["demo-00.npz", "demo-01.npz", "demo-02.npz"]  # nothing built
+    from app.tasks.library import task_templates
+    from app.tasks.task import task
+    with pytest.raises(ValueError, match="is of task 'bowl', not 'mug'"):
+        task_templates(task("mug"), out, rebuild=True)

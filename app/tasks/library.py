@@ -27,6 +27,14 @@ def task_demos(out: Path) -> list[Demo]:
     return [load_demo(p) for p in paths]
 
 
+def check_demos_task(t: Task, demos: list[Demo]) -> None:
+    """Refuse demos recorded for another task than the one whose demos `t` imitates (`Task.demos`)."""
+    for d in demos:
+        if d.task != t.demos:
+            raise ValueError(f"demo {d.name or '?'} ({d.category}) is of task {d.task!r}, not {t.demos!r}: "
+                             f"it does not belong in the {t.demos} demos")
+
+
 def template_path(out: Path, stage: str, query: str = "ibs", feature: str = "nif", nif: str | Path | None = None) -> Path:
     """Where a task's template lives; templates built with other field weights than the shipped ones
     (`nif`: see `field_override`) carry the weights' hash in the name, so several sit side by side."""
@@ -37,7 +45,9 @@ def template_path(out: Path, stage: str, query: str = "ibs", feature: str = "nif
 
 def build_task_templates(t: Task, demos: list[Demo], query: str = "ibs", feature: str = "nif",
                          n_points: int = 500, seed: int = 0, nif: str | Path | None = None) -> dict[str, Template]:
-    """The grasp and place templates of a task from its demos (`nif`: NIF weights, default shipped)."""
+    """The grasp and place templates of a task from its demos (`nif`: NIF weights, default shipped);
+    a one-line error when a demo is of another task (a bowl's demo in the mug's folder)."""
+    check_demos_task(t, demos)
     weights = field_override(feature, nif)
     return {stage: build_template(stage_anchor(t, stage), anchor_mesh(stage_anchor(t, stage)), template_frames(demos, stage),
                                   query, feature, n_points, weights=weights, seed=seed) for stage in STAGES}
