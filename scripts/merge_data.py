@@ -31,6 +31,7 @@ def merge(out: Path, sources: list[Path]) -> dict:
         raise ValueError("no source directories given")
     merged["config"]["instances"] = sum(json.loads((s / "manifest.json").read_text())["config"]["instances"]
                                         for s in sources)
+    merged["complete"] = all(json.loads((s / "manifest.json").read_text()).get("complete", True) for s in sources)
     merged["merged_from"] = [str(s) for s in sources]
     (out / "manifest.json").write_text(json.dumps(merged, indent=1))
     return merged

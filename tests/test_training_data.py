@@ -156,3 +156,24 @@ def test_a_manifest_cannot_name_a_shard_outside_its_directory(tmp_path):
         (data / "manifest.json").write_text(json.dumps(manifest))
         with pytest.raises(ValueError, match="lies outside"):
             FieldData(data)
+
+
+def test_a_set_stopped_after_its_first_shard_is_refused_for_training_until_resumed(tmp_path, monkeypatch):
+    import app.training.data as data_module
+
+    data = tmp_path / "data"
+    real = data_module.run_shards
+
+    def stopped(*args, **kwargs):
+        yield next(iter(real(*args, **kwargs)))
+        raise KeyboardInterrupt  # killed once the first shard and its manifest line are written
+
+    monkeypatch.setattr(data_module, "run_shards", stopped)
+    with pytest.raises(KeyboardInterrupt):
+        make_dataset(TINY, data, workers=1, progress=False)
+    assert not json.loads((data / "manifest.json").read_text())["complete"]
+    with pytest.raises(ValueError, match="is incomplete .*1 shards.*resume it"):
+        FieldData(data)
+    monkeypatch.setattr(data_module, "run_shards", real)
+    assert make_dataset(TINY, data, workers=1, progress=False).manifest["complete"]
+    assert FieldData(data).n_samples == 3 * 2 * 2

@@ -193,6 +193,7 @@ def make_dataset(cfg: DataConfig, out: str | Path, workers: int = 2, progress: b
     done = {s["file"] for s in manifest["shards"] if (out / s["file"]).is_file()}
     manifest["shards"] = [s for s in manifest["shards"] if s["file"] in done]
     todo = [i for i in range(len(shards)) if shard_name(i) not in done]
+    manifest["complete"] = not todo  # until the last shard is written, the set is marked incomplete
     start, report = time.perf_counter(), DataReport(manifest)
     bar = tqdm(total=sum(len(s) for s in shards), initial=sum(s["instances"] for s in manifest["shards"]),
                unit="inst", disable=not progress, desc="make-data")

@@ -26,6 +26,9 @@ class FieldData:
             raise FileNotFoundError(f"no manifest.json in {path}: make the data first with `nift make-data --out {path}`")
         if not manifest["shards"]:
             raise ValueError(f"{path} holds no shards yet")
+        if not manifest.get("complete", True):  # manifests before the flag existed were written complete only
+            raise ValueError(f"{path} is incomplete ({len(manifest['shards'])} shards: `nift make-data` was stopped "
+                             f"before the end); resume it with the same `nift make-data --out {path} ...`")
         self.path, self.manifest, self.config = path, manifest, manifest["config"]
         parts: dict[str, list[np.ndarray]] = {k: [] for k in ARRAYS}
         offset = 0
