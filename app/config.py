@@ -32,7 +32,10 @@ def from_dict(cls: type[T], data: dict[str, Any], where: str = "") -> T:
             values[key] = tuple(tuple(v) if isinstance(v, list) else v for v in value)
         else:
             values[key] = _checked(hint, value, f"{where}{key!r}")
-    return dataclasses.replace(cls(), **values)
+    try:
+        return dataclasses.replace(cls(), **values)
+    except ValueError as exc:  # the dataclass's own range checks
+        raise ValueError(f"{where}{exc}") from None
 
 
 SCALARS = {bool: "true or false", int: "an integer", float: "a number", str: "a string"}

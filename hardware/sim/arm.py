@@ -17,6 +17,7 @@ from hardware.interfaces import Arm, JointLimits, ProtectiveStopError
 from hardware.motion_profile import ruckig_profile
 from hardware.robot_description import HOME_Q
 from hardware.se3 import interpolate_pose, line_length, pose_to_ur, ur_to_pose
+from hardware.settings import check_ranges
 from hardware.sim.robot import SimRobot
 
 # Documented limits beyond the URDF (which gives position and velocity only).
@@ -33,6 +34,10 @@ class SimArmConfig:
     tracking_error_limit: float = 0.05  # rad, any joint
     contact_force_limit: float = 150.0  # N on any arm link (not the fingers)
     settle_time: float = 0.15  # s of holding the final target after a motion
+
+    def __post_init__(self) -> None:
+        check_ranges(self, (("tracking_error_limit", 0.0, 1.0, "rad", False),
+                            ("contact_force_limit", 0.0, 10_000.0, "N", False), ("settle_time", 0.0, 10.0, "s", True)))
 
 
 class SimArm(Arm):

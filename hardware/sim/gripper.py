@@ -7,6 +7,7 @@ import numpy as np
 
 from hardware.bullet import p
 from hardware.interfaces import Gripper
+from hardware.settings import check_ranges
 from hardware.sim.robot import SimRobot
 
 CLOSED_TOLERANCE = 0.002  # m: a closed gripper narrower than this holds nothing
@@ -18,6 +19,9 @@ class SimGripperConfig:
 
     timeout: float = 2.0  # s allowed for an open or close
     settle_speed: float = 1e-3  # m/s: fingers slower than this have stopped
+
+    def __post_init__(self) -> None:
+        check_ranges(self, (("timeout", 0.0, 60.0, "s", False), ("settle_speed", 0.0, 1.0, "m/s", False)))
 
 
 class SimGripper(Gripper):

@@ -13,6 +13,7 @@ import numpy as np
 from hardware import bullet
 from hardware.bullet import TABLE_HEIGHT, p, pybullet_to_pose
 from hardware.interfaces import DeviceNotConnectedError
+from hardware.settings import check_ranges
 
 
 @dataclass(frozen=True)
@@ -23,6 +24,10 @@ class SimWorldConfig:
     time_step: float = 1.0 / 240.0
     solver_iterations: int = 80
     gravity: float = -9.81
+
+    def __post_init__(self) -> None:
+        check_ranges(self, (("time_step", 0.0, 0.05, "s", False), ("solver_iterations", 1, 10_000, "iterations", True),
+                            ("gravity", -50.0, 0.0, "m/s^2", True)))
 
 
 class SimWorld:
