@@ -2,8 +2,13 @@
 from __future__ import annotations
 
 import argparse
+import os
 import signal
 import sys
+import tempfile
+import time
+import traceback
+from pathlib import Path
 
 from app import __version__
 from app.commands import (bench, bench_cell, bench_field, bench_geometry, bench_imitation, bench_jobs, calibrate,
@@ -25,8 +30,28 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+# What a user's input or files can cause: one line and exit 2. OSError covers the paths a user gives
+# (a directory where a file goes, a file where a directory goes, no permission, a full disk).
+EXPECTED = (ValueError, OSError)
+
+
+def log_dir() -> Path:
+    """Where the traceback of an unexpected error is written ($NIFT_LOG_DIR, default the temp dir)."""
+    return Path(os.environ.get("NIFT_LOG_DIR") or Path(tempfile.gettempdir()) / "nift-logs")
+
+
+def write_log(verb: str) -> Path:
+    """The current exception's traceback in a new log file; its path."""
+    directory = log_dir()
+    directory.mkdir(parents=True, exist_ok=True)
+    path = directory / f"nift-{verb}-{time.strftime('%Y%m%d-%H%M%S')}-{os.getpid()}.log"
+    path.write_text(f"nift {' '.join(sys.argv[1:])}\n{traceback.format_exc()}")
+    return path
+
+
 def main(argv: list[str] | None = None) -> int:
-    """Entry point: parse, run the verb, turn expected errors into one line on stderr and exit 2."""
+    """Entry point: parse, run the verb; an expected error becomes one line on stderr and exit 2, an
+    unexpected one a line naming the log file that holds its traceback and exit 1."""
     signal.signal(signal.SIGPIPE, signal.SIG_DFL)  # `nift ... | head` ends quietly
     parser = build_parser()
     args = parser.parse_args(argv)
@@ -35,9 +60,16 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     try:
         return int(args.run(args) or 0)
-    except (ValueError, FileNotFoundError) as exc:
+    except EXPECTED as exc:
         print(f"nift {args.verb}: error: {exc}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:
+        print(f"nift {args.verb}: interrupted", file=sys.stderr)
+        return 130
+    except Exception as exc:  # noqa: BLE001 - a bug of ours: one line, the traceback in a file
+        print(f"nift {args.verb}: internal error: {type(exc).__name__}: {exc} (traceback in {write_log(args.verb)})",
+              file=sys.stderr)
+        return 1
 
 
 if __name__ == "__main__":

@@ -26,6 +26,17 @@ def atomic_path(path: str | Path) -> Iterator[Path]:
             tmp_path.unlink()
 
 
+def writable_directory(path: str | Path, what: str) -> Path:
+    """`path` if it is, or could be made, a directory this process can write; a one-line error if not."""
+    path = Path(path)
+    if path.exists() and not path.is_dir():
+        raise ValueError(f"{what} {path} is a file; give a directory")
+    existing = next(p for p in (path, *path.parents) if p.exists())
+    if not os.access(existing, os.W_OK | os.X_OK):
+        raise ValueError(f"{what} {path}: {existing} is not writable")
+    return path
+
+
 def write_json(path: str | Path, data: dict) -> Path:
     """Write JSON atomically (indented, keys in insertion order)."""
     with atomic_path(path) as tmp:

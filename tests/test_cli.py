@@ -146,3 +146,46 @@ def test_imitate_refuses_a_cloud_no_object_in_the_cell_could_be_in_one_line(tmp_
     out = nift("imitate", "--task", "mug", "--cloud", str(cloud))
     assert out.returncode == 2 and out.stderr.strip().count("\n") == 0, out.stderr
     assert message in out.stderr and str(cloud) in out.stderr
+
+
+def _calibration_dir(tmp_path):
+    (tmp_path / "calib").mkdir()
+    return ["run", "--task", "bowl", "--method", "teacher", "--calibration", str(tmp_path / "calib")], "calib"
+
+
+def _manifest_list(tmp_path):
+    (tmp_path / "data").mkdir()
+    (tmp_path / "data" / "manifest.json").write_text("[1, 2]")
+    return ["train", "--target", "scf", "--data", str(tmp_path / "data"), "--out", str(tmp_path / "runs")], "manifest.json"
+
+
+def _bench_out_file(tmp_path):
+    (tmp_path / "results.txt").write_text("mine")
+    return ["bench", "--quick", "--out", str(tmp_path / "results.txt")], "results.txt"
+
+
+@pytest.mark.parametrize("case", [_calibration_dir, _manifest_list, _bench_out_file])
+def test_bad_paths_end_in_one_line_naming_them_and_leave_nothing_behind(tmp_path, case):
+    args, name = case(tmp_path)
+    before = sorted(p.name for p in tmp_path.rglob("*"))
+    out = nift(*args)
+    assert out.returncode == 2 and out.stderr.strip().count("\n") == 0, out.stderr
+    assert name in out.stderr and "Traceback" not in out.stderr
+    assert sorted(p.name for p in tmp_path.rglob("*")) == before  # no run directory, no temp file
+    if name == "results.txt":
+        assert (tmp_path / "results.txt").read_text() == "mine"  # the user's file is untouched
+
+
+def test_an_unexpected_error_is_one_line_naming_a_log_that_holds_the_traceback(tmp_path, monkeypatch, capsys):
+    from app.commands import objects
+
+    def broken(args):
+        raise RuntimeError("a bug of ours")
+
+    monkeypatch.setattr(objects, "run", broken)
+    monkeypatch.setenv("NIFT_LOG_DIR", str(tmp_path))
+    assert main(["objects", "--category", "mug", "--count", "1", "--out", str(tmp_path / "x.png")]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "internal error: RuntimeError: a bug of ours" in err[0]
+    log = next(tmp_path.glob("nift-objects-*.log"))
+    assert str(log) in err[0] and "Traceback" in log.read_text() and "a bug of ours" in log.read_text()

@@ -64,6 +64,7 @@ def run(args: argparse.Namespace) -> int:
     from app.bench.protocol import BenchConfig
     from app.bench.report import write_report
     from app.bench.runner import run as run_bench
+    from app.io_utils import writable_directory
     from app.predict.methods import ORACLE, check_method
     from app.categories import POSES
     from app.tasks.task import task
@@ -80,6 +81,7 @@ def run(args: argparse.Namespace) -> int:
                          args.nif, center_grasp=args.center_grasp, align_grasp=args.align_grasp,
                          feasible=args.feasible,
                          place_contact_scale=args.place_contact_scale, place_demo_match=args.place_demo_match)
+    writable_directory(args.out, "--out")  # before the progress bar: the error is the only line
     with tqdm(unit="trial", desc="bench", disable=args.json) as bar:
         def progress(done: int, total: int) -> None:
             bar.total = total

@@ -135,10 +135,10 @@ def train(cfg: TrainConfig, data_dir: str | Path, out: str | Path, eval_dir: str
           init: str | Path | None = None) -> dict:
     """Train, checkpoint, evaluate and write the final weights + model card; return the card."""
     out = Path(out)
+    data = FieldData(data_dir)  # before the run directory exists: bad data leaves nothing behind
     out.mkdir(parents=True, exist_ok=True)
     torch.manual_seed(cfg.seed)
     device = pick_device()
-    data = FieldData(data_dir)
     train_idx, val_idx = data.split(cfg.val_fraction, cfg.seed)
     val_idx = np.random.default_rng(cfg.seed).permutation(val_idx)[:cfg.val_samples]
     model = NeuralField(cfg.field).to(device)
