@@ -263,3 +263,21 @@ def test_gripper_clear_refuses_a_grasp_from_under_the_table_and_passes_the_same_
     down = rotvec_to_matrix([np.pi, 0, 0])  # approach -z
     assert clear(make_pose(down, [0.5, 0.0, 0.09]))
     assert not clear(make_pose(np.eye(3), [0.5, 0.0, 0.02]))  # approach +z: from under the table
+
+
+def test_approach_clear_passes_fingers_beside_a_wall_and_refuses_one_coming_down_on_it():
+    """A thin wall (a rim, 2 mm) along x at y = 0; fingers straddling it close across it (TCP y = 0),
+    a TCP moved 4.25 cm sideways puts one finger's path onto the wall's top edge."""
+    from app.jobs.job import approach_clear
+    from hardware.gripper_geometry import GripperGeometry
+
+    g = GripperGeometry()
+    wall = np.array([[x, y, z] for x in np.linspace(0.48, 0.52, 9) for y in (-0.001, 0.001)
+                     for z in np.linspace(0.0, 0.08, 17)])
+    down = rotvec_to_matrix([np.pi, 0, 0])  # tool z down; its y axis is the base's -y: fingers at +-y
+    straddle = make_pose(down, [0.5, 0.0, 0.07])
+    assert approach_clear(straddle, wall, 0.10, g)
+    onto = make_pose(down, [0.5, g.stroke / 2 + g.finger[1] / 2, 0.07])
+    assert not approach_clear(onto, wall, 0.10, g)
+    above = make_pose(down, [0.5, g.stroke / 2 + g.finger[1] / 2, 0.20])  # the fingertips stop above the wall
+    assert approach_clear(above, wall, 0.10, g)

@@ -43,6 +43,7 @@ from app.predict.predict import (Prediction, predict, predict_place,
                                  refine_grasp)
 from app.predict.table_clearance import backed_off_table
 from app.tasks.task import Task
+from hardware.gripper_geometry import GripperGeometry
 from hardware.interfaces import Arm, DepthCamera, Frame, Gripper
 from hardware.kinematics import UR5Kinematics
 from hardware.se3 import pose_to_ur, transform_points, ur_to_pose
@@ -196,12 +197,28 @@ def run_job(t: Task, arm: Arm, gripper: Gripper, camera: DepthCamera, T_base_cam
 def gripper_clear(scene: PlanningScene, cloud: np.ndarray, config: JobConfig) -> Callable[[np.ndarray], bool]:
     """Grasp pose (4, 4) -> whether the open gripper there, refined and backed off the table as the
     job will do it, hits nothing of the cell (table, fixtures): the imitation's pruning keeps such
-    grasps before others (a grasp from under the table or through it is no grasp for a cell)."""
+    grasps before others (a grasp from under the table or through it is no grasp for a cell); nor
+    may the open gripper pass through the object's seen points on its way in (`approach_clear`)."""
     def clear(T_base_tcp: np.ndarray) -> bool:
         T = refine_grasp(T_base_tcp, cloud, center=config.center_grasp, align=config.align_grasp)
-        return not scene.gripper_collisions(backed_off_table(T, cloud, config.table_z), ignore=(OBJECT,))
+        T = backed_off_table(T, cloud, config.table_z)
+        return not scene.gripper_collisions(T, ignore=(OBJECT,)) and approach_clear(
+            T, cloud, config.executor.approach_distance, scene.geometry)
 
     return clear
+
+
+def approach_clear(T_base_tcp: np.ndarray, cloud: np.ndarray, distance: float, geometry: GripperGeometry,
+                   margin: float = 0.002, step: float = 0.005) -> bool:
+    """Whether no cloud point (N, 3) lies in the open gripper's palm or fingers (grown by `margin`) at
+    any pose of the approach line, from `distance` back along the tool axis to T_base_tcp: the
+    planning scene lets the approach pass the object's hull (it must, to close on it), so a finger
+    coming down on the rim instead of beside it is caught here (it stopped the arm on the line)."""
+    local = (np.asarray(cloud, float) - T_base_tcp[:3, 3]) @ T_base_tcp[:3, :3]  # (N, 3) TCP frame
+    for s in np.arange(0.0, distance + 1e-9, step):  # the gripper s back: points sit s further along z
+        if geometry.contains(local + [0.0, 0.0, s], None, margin).any():
+            return False
+    return True
 
 
 @dataclass
