@@ -265,11 +265,17 @@ def load_field(name_or_path: str | Path = "nif", device: str | torch.device = "c
         found = blob.get("format") if isinstance(blob, dict) else type(blob).__name__
         raise ValueError(f"{path}: expected format {FORMAT!r}, found {found!r}")
     known = {f.name for f in fields(FieldConfig)}
-    unknown = set(blob["config"]) - known
+    config, state = blob.get("config"), blob.get("state")
+    if not isinstance(config, dict) or not isinstance(state, dict) or not state:
+        raise ValueError(f"{path}: a weights file needs a config and a non-empty state")
+    unknown = set(config) - known
     if unknown:
         raise ValueError(f"{path}: unknown field config keys {sorted(unknown)}")
-    field = NeuralField(FieldConfig(**blob["config"])).to(device)
-    field.load_state_dict(blob["state"])
+    try:
+        field = NeuralField(FieldConfig(**config)).to(device)
+        field.load_state_dict(state)
+    except (TypeError, ValueError, RuntimeError) as exc:  # load_state_dict lists every missing key
+        raise ValueError(f"{path}: the weights do not fit their config ({str(exc).splitlines()[0][:160]})") from None
     return field.eval()
 
 

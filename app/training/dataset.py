@@ -6,6 +6,7 @@ labelled query points, moved into the sample's pose, x = R (s q).
 """
 from __future__ import annotations
 
+import zipfile
 from pathlib import Path
 
 import numpy as np
@@ -33,10 +34,14 @@ class FieldData:
         parts: dict[str, list[np.ndarray]] = {k: [] for k in ARRAYS}
         offset = 0
         for shard in manifest["shards"]:
-            with np.load(shard_path(path, shard.get("file") if isinstance(shard, dict) else shard)) as z:
-                for k in ARRAYS:
-                    parts[k].append(z[k] + offset if k == "sample_instance" else z[k])
-                offset += len(z["seed"])
+            file = shard_path(path, shard.get("file") if isinstance(shard, dict) else shard)
+            try:
+                with np.load(file, allow_pickle=False) as z:
+                    for k in ARRAYS:
+                        parts[k].append(z[k] + offset if k == "sample_instance" else z[k])
+                    offset += len(z["seed"])
+            except (KeyError, ValueError, OSError, EOFError, zipfile.BadZipFile) as exc:  # truncated, foreign, pickled
+                raise ValueError(f"{file} is not a readable shard ({type(exc).__name__}: {exc})") from None
         for k, v in parts.items():
             setattr(self, k, np.concatenate(v))
         self.cloud = self.cloud.astype(np.float32)
