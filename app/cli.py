@@ -18,9 +18,16 @@ COMMANDS = [run, objects, sim, calibrate, capture, make_data, train, teach, imit
             bench_field, bench_imitation, bench_jobs, bench]
 
 
+class OneLineParser(argparse.ArgumentParser):
+    """argparse, whose usage errors are one line on stderr (its usage text stays with --help), exit 2."""
+
+    def error(self, message: str):
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser with every verb registered."""
-    parser = argparse.ArgumentParser(prog="nift", description="NIFT cell: teach-by-demonstration pick-and-place.")
+    parser = OneLineParser(prog="nift", description="NIFT cell: teach-by-demonstration pick-and-place.")
     parser.add_argument("--version", action="version", version=f"nift-cell {__version__}")
     verbs = parser.add_subparsers(dest="verb", metavar="VERB")
     for command in COMMANDS:

@@ -48,6 +48,11 @@ def test_bad_input_gives_one_line_error():
     assert out.stderr.strip().count("\n") == 0 and "--count must be between" in out.stderr
     with pytest.raises(SystemExit):
         build_parser().parse_args(["objects", "--category", "teapot"])
+    for args, named in ((("run", "--task", "cup"), "invalid choice: 'cup'"), (("run",), "--task"),
+                        (("bogus",), "invalid choice: 'bogus'")):
+        out = nift(*args)  # argparse's own errors: one line, no usage text before it
+        assert out.returncode == 2 and out.stderr.strip().count("\n") == 0 and named in out.stderr, out.stderr
+        assert "usage:" not in out.stderr
 
 
 def test_bench_geometry_quick_reports_every_figure():

@@ -10,6 +10,7 @@ from app.nift.template import load_template
 from app.objects.fixtures import SHELF_SIZE, SHELF_TOP
 from app.sim.cell import CellConfig
 from app.tasks.demo import load_demo
+from app.tasks.library import DEMOS_DIR, task_demos
 
 
 @pytest.mark.slow
@@ -51,6 +52,9 @@ def test_teach_records_verified_demos_and_imitate_uses_them(tmp_path, capsys):
 def test_imitate_refuses_bad_input(tmp_path, capsys):
     assert main(["imitate", "--task", "mug", "--cloud", str(tmp_path / "none.ply")]) == 2
     assert "no point cloud" in capsys.readouterr().err
-    np.save(tmp_path / "c.npy", np.zeros((100, 3)))
+    np.save(tmp_path / "c.npy", np.zeros((100, 3)))  # 100 copies of one point
+    assert main(["imitate", "--task", "mug", "--cloud", str(tmp_path / "c.npy")]) == 2
+    assert "has 1 distinct points" in capsys.readouterr().err
+    np.save(tmp_path / "c.npy", task_demos(DEMOS_DIR / "mug")[0].cloud)
     assert main(["imitate", "--task", "mug", "--cloud", str(tmp_path / "c.npy"), "--demos", str(tmp_path)]) == 2
     assert "no demos in" in capsys.readouterr().err
