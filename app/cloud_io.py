@@ -1,6 +1,9 @@
 """Reading point clouds users hand us (PLY, PCD, XYZ via Open3D; .npy arrays), with one-line errors."""
 from __future__ import annotations
 
+import os
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
@@ -13,6 +16,33 @@ SUFFIXES = (".ply", ".pcd", ".xyz", ".npy")
 MIN_POINTS = 16
 EXTENT = (0.02, 0.8)  # m, the largest side of the cloud's bounding box
 REACH = 1.2  # m from the base frame's origin to the cloud's centroid
+
+
+@contextmanager
+def c_output() -> Iterator[list[str]]:
+    """Inside the block, what C libraries write to stdout and stderr (Open3D's reader and its RPly
+    print their own messages) is caught; the list holds its lines, colour codes removed, after it."""
+    import re
+    import sys
+    import tempfile
+
+    lines: list[str] = []
+    sys.stdout.flush()
+    sys.stderr.flush()
+    saved = [os.dup(1), os.dup(2)]
+    with tempfile.TemporaryFile(mode="w+b") as sink:
+        os.dup2(sink.fileno(), 1)
+        os.dup2(sink.fileno(), 2)
+        try:
+            yield lines
+        finally:
+            os.dup2(saved[0], 1)
+            os.dup2(saved[1], 2)
+            for fd in saved:
+                os.close(fd)
+            sink.seek(0)
+            text = re.sub(r"\x1b\[[0-9;]*m", "", sink.read().decode(errors="replace"))
+            lines += [line.strip() for line in text.splitlines() if line.strip()]
 
 
 def load_cloud(path: str | Path) -> np.ndarray:
@@ -29,7 +59,10 @@ def load_cloud(path: str | Path) -> np.ndarray:
         except ValueError as exc:
             raise ValueError(f"{path} is not a readable .npy array ({exc})") from None
     else:
-        cloud = np.asarray(o3d.io.read_point_cloud(str(path)).points)
+        with c_output() as said:
+            cloud = np.asarray(o3d.io.read_point_cloud(str(path)).points)
+        if problem := next((line for line in said if "fail" in line.lower() or "error" in line.lower()), None):
+            raise ValueError(f"{path}: not a readable {suffix[1:].upper()} cloud ({problem})")
     cloud = np.asarray(cloud, dtype=np.float64)
     if cloud.ndim != 2 or cloud.shape[1] != 3:
         raise ValueError(f"{path}: a cloud must be N x 3, got shape {cloud.shape}")

@@ -194,3 +194,15 @@ def test_an_unexpected_error_is_one_line_naming_a_log_that_holds_the_traceback(t
     assert len(err) == 1 and "internal error: RuntimeError: a bug of ours" in err[0]
     log = next(tmp_path.glob("nift-objects-*.log"))
     assert str(log) in err[0] and "Traceback" in log.read_text() and "a bug of ours" in log.read_text()
+
+
+@pytest.mark.parametrize("text, said", [
+    ("garbage\n", "unable to parse header"),
+    ("ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nend_header\n1\n", "Error reading 'x'"),
+])
+def test_a_broken_ply_is_one_line_and_open3d_prints_nothing_of_its_own(tmp_path, text, said):
+    cloud = tmp_path / "bad.ply"
+    cloud.write_text(text)
+    out = nift("imitate", "--task", "mug", "--cloud", str(cloud))
+    assert out.returncode == 2 and out.stdout == "" and out.stderr.strip().count("\n") == 0, (out.stdout, out.stderr)
+    assert "not a readable PLY cloud" in out.stderr and said in out.stderr
