@@ -256,10 +256,10 @@ def test_fingers_closed_on_a_held_object_clear_what_the_open_ones_hit(kin, scene
 def test_gripper_clear_refuses_a_grasp_from_under_the_table_and_passes_the_same_from_above(scene):
     """A side wall seen as a cloud; grasped from above it is clear, the same contact from below puts
     the gripper into the table (the back-off cannot help: the approach points up)."""
-    from app.jobs.job import JobConfig, gripper_clear
+    from app.jobs.clearance import gripper_clear
 
     wall = np.array([[0.5, y, z] for y in np.linspace(-0.01, 0.01, 5) for z in np.linspace(0.0, 0.1, 40)])
-    clear = gripper_clear(scene, wall, JobConfig())
+    clear = gripper_clear(scene, wall)
     down = rotvec_to_matrix([np.pi, 0, 0])  # approach -z
     assert clear(make_pose(down, [0.5, 0.0, 0.09]))
     assert not clear(make_pose(np.eye(3), [0.5, 0.0, 0.02]))  # approach +z: from under the table
@@ -268,7 +268,7 @@ def test_gripper_clear_refuses_a_grasp_from_under_the_table_and_passes_the_same_
 def test_approach_clear_passes_fingers_beside_a_wall_and_refuses_one_coming_down_on_it():
     """A thin wall (a rim, 2 mm) along x at y = 0; fingers straddling it close across it (TCP y = 0),
     a TCP moved 4.25 cm sideways puts one finger's path onto the wall's top edge."""
-    from app.jobs.job import approach_clear
+    from app.jobs.clearance import approach_clear
     from hardware.gripper_geometry import GripperGeometry
 
     g = GripperGeometry()

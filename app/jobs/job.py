@@ -28,6 +28,7 @@ import numpy as np
 
 from app.jobs.check import placed
 from app.jobs.choice import NoCandidate, choose, describe
+from app.jobs.clearance import gripper_clear
 from app.jobs.second_look import SecondLookConfig, second_look
 from app.motion.executor import (OBJECT, ExecutionError, ExecutorConfig,
                                  Planner, execute, reverse)
@@ -39,11 +40,9 @@ from app.perception import PerceptionConfig, object_cloud
 from app.predict.candidates import Candidate
 from app.predict.grasp_centering import held_width
 from app.predict.methods import QUERY_FEATURE
-from app.predict.predict import (Prediction, predict, predict_place,
-                                 refine_grasp)
+from app.predict.predict import Prediction, predict, predict_place
 from app.predict.table_clearance import backed_off_table
 from app.tasks.task import Task
-from hardware.gripper_geometry import GripperGeometry
 from hardware.interfaces import Arm, DepthCamera, Frame, Gripper
 from hardware.kinematics import UR5Kinematics
 from hardware.se3 import pose_to_ur, transform_points, ur_to_pose
@@ -181,7 +180,9 @@ def run_job(t: Task, arm: Arm, gripper: Gripper, camera: DepthCamera, T_base_cam
         def predictor(cloud: np.ndarray) -> Prediction:
             return predict(t, cloud, config.method, T_base_fixture, config.demos, config.imitation,
                            center=config.center_grasp, feasible=config.feasible, align=config.align_grasp,
-                           reachable=gripper_clear(scene, cloud, config), carried_grasps=config.carried_grasps)
+                           reachable=gripper_clear(scene, cloud, config.table_z, config.executor.approach_distance,
+                                                   config.center_grasp, config.align_grasp),
+                           carried_grasps=config.carried_grasps)
     try:
         _run(_Job(t, arm, gripper, camera, T_base_cam, T_base_fixture, scene, kin, config, hooks, predictor, result,
                   placer))
@@ -192,33 +193,6 @@ def run_job(t: Task, arm: Arm, gripper: Gripper, camera: DepthCamera, T_base_cam
     finally:
         scene.remove(OBJECT)
     return result
-
-
-def gripper_clear(scene: PlanningScene, cloud: np.ndarray, config: JobConfig) -> Callable[[np.ndarray], bool]:
-    """Grasp pose (4, 4) -> whether the open gripper there, refined and backed off the table as the
-    job will do it, hits nothing of the cell (table, fixtures): the imitation's pruning keeps such
-    grasps before others (a grasp from under the table or through it is no grasp for a cell); nor
-    may the open gripper pass through the object's seen points on its way in (`approach_clear`)."""
-    def clear(T_base_tcp: np.ndarray) -> bool:
-        T = refine_grasp(T_base_tcp, cloud, center=config.center_grasp, align=config.align_grasp)
-        T = backed_off_table(T, cloud, config.table_z)
-        return not scene.gripper_collisions(T, ignore=(OBJECT,)) and approach_clear(
-            T, cloud, config.executor.approach_distance, scene.geometry)
-
-    return clear
-
-
-def approach_clear(T_base_tcp: np.ndarray, cloud: np.ndarray, distance: float, geometry: GripperGeometry,
-                   margin: float = 0.002, step: float = 0.005) -> bool:
-    """Whether no cloud point (N, 3) lies in the open gripper's palm or fingers (grown by `margin`) at
-    any pose of the approach line, from `distance` back along the tool axis to T_base_tcp: the
-    planning scene lets the approach pass the object's hull (it must, to close on it), so a finger
-    coming down on the rim instead of beside it is caught here (it stopped the arm on the line)."""
-    local = (np.asarray(cloud, float) - T_base_tcp[:3, 3]) @ T_base_tcp[:3, :3]  # (N, 3) TCP frame
-    for s in np.arange(0.0, distance + 1e-9, step):  # the gripper s back: points sit s further along z
-        if geometry.contains(local + [0.0, 0.0, s], None, margin).any():
-            return False
-    return True
 
 
 @dataclass

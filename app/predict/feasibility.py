@@ -27,7 +27,7 @@ checked (30 degrees) cost mug places (0.40 -> 0.10 arbitrary): a mug grasped els
 hangs with the gripper at another tilt.
 
 Executed jobs add one more test on grasps (`reaches`, a predicate the caller gives): the cell's
-open gripper there must hit nothing of the cell (`app.jobs.job.gripper_clear`: no table, no
+open gripper there must hit nothing of the cell (`app.jobs.clearance.gripper_clear`: no table, no
 fixture). The teleported benchmark judges switch gripper-table collisions off (NDF's protocol) and
 do not use it; on the cell a grasp through the table or from under it fails at planning (on one
 Kinect view of an upright mug, most of the imitation's low-loss grasps came from below its foot).

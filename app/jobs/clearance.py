@@ -1,0 +1,41 @@
+"""The cell's clearance rules for grasps (our addition): the imitation's pruning keeps grasps the
+cell can make before others - the open gripper, refined and backed off the table as the job will do
+it, hits nothing of the cell, and on its way in along the approach line passes none of the object's
+seen points (the planning scene lets the approach pass the object's hull: it must, to close on it).
+"""
+from __future__ import annotations
+
+from collections.abc import Callable
+import numpy as np
+
+from app.motion.executor import OBJECT
+from app.motion.scene import PlanningScene
+from app.predict.predict import refine_grasp
+from app.predict.table_clearance import backed_off_table
+from hardware.gripper_geometry import GripperGeometry
+
+def gripper_clear(scene: PlanningScene, cloud: np.ndarray, table_z: float = 0.0, approach: float = 0.10,
+                  center: bool = True, align: bool = False) -> Callable[[np.ndarray], bool]:
+    """Grasp pose (4, 4) -> whether the open gripper there, refined (`center`, `align`) and backed off
+    the table top at `table_z` as the job will do it, hits nothing of the cell (table, fixtures): the
+    imitation's pruning keeps such grasps before others (a grasp from under the table or through it is
+    no grasp for a cell); nor may the open gripper pass through the object's seen points on its way
+    in along the last `approach` metres (`approach_clear`)."""
+    def clear(T_base_tcp: np.ndarray) -> bool:
+        T = backed_off_table(refine_grasp(T_base_tcp, cloud, center=center, align=align), cloud, table_z)
+        return not scene.gripper_collisions(T, ignore=(OBJECT,)) and approach_clear(T, cloud, approach, scene.geometry)
+
+    return clear
+
+
+def approach_clear(T_base_tcp: np.ndarray, cloud: np.ndarray, distance: float, geometry: GripperGeometry,
+                   margin: float = 0.002, step: float = 0.005) -> bool:
+    """Whether no cloud point (N, 3) lies in the open gripper's palm or fingers (grown by `margin`) at
+    any pose of the approach line, from `distance` back along the tool axis to T_base_tcp: the
+    planning scene lets the approach pass the object's hull (it must, to close on it), so a finger
+    coming down on the rim instead of beside it is caught here (it stopped the arm on the line)."""
+    local = (np.asarray(cloud, float) - T_base_tcp[:3, 3]) @ T_base_tcp[:3, :3]  # (N, 3) TCP frame
+    for s in np.arange(0.0, distance + 1e-9, step):  # the gripper s back: points sit s further along z
+        if geometry.contains(local + [0.0, 0.0, s], None, margin).any():
+            return False
+    return True
