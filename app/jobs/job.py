@@ -337,7 +337,7 @@ def _look(job: _Job, planner: Planner, plan, chosen: Candidate, options: list, c
             return _replanned(job, planner, plan, chosen, cloud, (held, released), direction)
         starts = np.stack([c.T_base_fixture_seen for c in options if c.grasp_rank == chosen.grasp_rank])
         q, why = job.arm.getActualQ(), "no place"
-        for c in job.placer(fused, T_grasp, starts)[: job.config.most_plans]:
+        for c in job.placer(fused, chosen.T_base_tcp, starts)[: job.config.most_plans]:  # as imitated (no half-turn)
             try:
                 rest = planner.place_from(q, T_grasp, c.motion @ T_grasp, direction, (held, released))
             except NoIKSolution as exc:
