@@ -206,3 +206,21 @@ def test_a_broken_ply_is_one_line_and_open3d_prints_nothing_of_its_own(tmp_path,
     out = nift("imitate", "--task", "mug", "--cloud", str(cloud))
     assert out.returncode == 2 and out.stdout == "" and out.stderr.strip().count("\n") == 0, (out.stdout, out.stderr)
     assert "not a readable PLY cloud" in out.stderr and said in out.stderr
+
+
+def test_a_bench_that_fails_to_start_leaves_no_folder_and_bad_weights_fail_first(tmp_path, monkeypatch, capsys):
+    import app.bench.runner as runner
+
+    def failing(config, out, *args, **kwargs):
+        out.mkdir(parents=True)
+        (out / "run.json").write_text("{}")  # half prepared
+        raise ValueError("demos could not be prepared")
+
+    monkeypatch.setattr(runner, "run", failing)
+    out = tmp_path / "bench"
+    assert main(["bench", "--quick", "--out", str(out)]) == 2
+    assert not out.exists() and "demos could not be prepared" in capsys.readouterr().err
+    (tmp_path / "empty.pt").write_bytes(b"")
+    assert main(["bench", "--quick", "--out", str(out), "--nif", str(tmp_path / "empty.pt")]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("nift bench: error:") and "empty.pt" in err and not out.exists()  # no progress bar first

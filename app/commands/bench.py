@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import argparse
+import shutil
 from pathlib import Path
 
 NAME = "bench"
@@ -65,6 +66,8 @@ def run(args: argparse.Namespace) -> int:
     from app.bench.report import write_report
     from app.bench.runner import run as run_bench
     from app.io_utils import writable_directory
+    from app.nift.field import load_field
+    from app.nift.template import field_override
     from app.predict.methods import ORACLE, check_method
     from app.categories import POSES
     from app.tasks.task import task
@@ -82,13 +85,23 @@ def run(args: argparse.Namespace) -> int:
                          feasible=args.feasible,
                          place_contact_scale=args.place_contact_scale, place_demo_match=args.place_demo_match)
     writable_directory(args.out, "--out")  # before the progress bar: the error is the only line
-    with tqdm(unit="trial", desc="bench", disable=args.json) as bar:
-        def progress(done: int, total: int) -> None:
-            bar.total = total
-            bar.n = done
-            bar.refresh()
+    if args.nif is not None:  # the weights load before any work (and before the bar)
+        for feature in ("nif", "ndf"):
+            if (weights := field_override(feature, args.nif)) is not None:
+                load_field(weights)
+    created = not args.out.exists()
+    try:
+        with tqdm(unit="trial", desc="bench", disable=args.json) as bar:
+            def progress(done: int, total: int) -> None:
+                bar.total = total
+                bar.n = done
+                bar.refresh()
 
-        rows = run_bench(config, args.out, args.workers, progress, args.minutes)
+            rows = run_bench(config, args.out, args.workers, progress, args.minutes)
+    except BaseException:
+        if created and not (args.out / "results.jsonl").exists():  # a failed start leaves no half-made folder
+            shutil.rmtree(args.out, ignore_errors=True)
+        raise
     title = f"{args.setting} setting, {args.camera} camera, {args.demos} demos, seed {args.seed}"
     if config.fields:
         title += f", fields {config.fields}"
