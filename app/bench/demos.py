@@ -18,7 +18,7 @@ import numpy as np
 from app.bench.protocol import BenchConfig, trial_cloud
 from app.objects.catalog import generate
 from app.sim.cell import CellConfig
-from app.tasks.demo import Demo, load_demo, save_demo
+from app.tasks.demo import DEMO_GLOB, Demo, load_demo, save_demo
 from app.tasks.library import DEMOS_DIR
 from app.tasks.task import task
 
@@ -39,7 +39,7 @@ def bench_demos(config: BenchConfig, out: Path) -> Path:
     for name in sorted({task(t).demos for t in config.tasks}):
         target = root / name
         target.mkdir(parents=True, exist_ok=True)
-        for i, path in enumerate(sorted((DEMOS_DIR / name).glob("demo-*.npz"))[: config.demos]):
+        for i, path in enumerate(sorted((DEMOS_DIR / name).glob(DEMO_GLOB))[: config.demos]):
             dest = target / path.name
             if dest.exists():
                 continue

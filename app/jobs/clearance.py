@@ -6,6 +6,7 @@ seen points (the planning scene lets the approach pass the object's hull: it mus
 from __future__ import annotations
 
 from collections.abc import Callable
+
 import numpy as np
 
 from app.motion.executor import OBJECT
@@ -13,6 +14,7 @@ from app.motion.scene import PlanningScene
 from app.predict.predict import refine_grasp
 from app.predict.table_clearance import backed_off_table
 from hardware.gripper_geometry import GripperGeometry
+
 
 def gripper_clear(scene: PlanningScene, cloud: np.ndarray, table_z: float = 0.0, approach: float = 0.10,
                   center: bool = True, align: bool = False) -> Callable[[np.ndarray], bool]:
@@ -23,7 +25,8 @@ def gripper_clear(scene: PlanningScene, cloud: np.ndarray, table_z: float = 0.0,
     in along the last `approach` metres (`approach_clear`)."""
     def clear(T_base_tcp: np.ndarray) -> bool:
         T = backed_off_table(refine_grasp(T_base_tcp, cloud, center=center, align=align), cloud, table_z)
-        return not scene.gripper_collisions(T, ignore=(OBJECT,)) and approach_clear(T, cloud, approach, scene.geometry)
+        return (not scene.gripper_collisions(T, ignore=(OBJECT,))
+                and approach_clear(T, cloud, approach, scene.geometry))
 
     return clear
 

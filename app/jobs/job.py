@@ -39,7 +39,7 @@ from app.nift.imitate import ImitationConfig, use_threads
 from app.perception import PerceptionConfig, object_cloud
 from app.predict.candidates import Candidate
 from app.predict.grasp_centering import held_width
-from app.predict.methods import QUERY_FEATURE
+from app.predict.methods import TEMPLATE_METHODS
 from app.predict.predict import Prediction, predict, predict_place
 from app.predict.table_clearance import backed_off_table
 from app.tasks.task import Task
@@ -172,7 +172,7 @@ def run_job(t: Task, arm: Arm, gripper: Gripper, camera: DepthCamera, T_base_cam
     use_threads(config.threads)
     kin = UR5Kinematics(tcp_offset=ur_to_pose(arm.getTCPOffset()))
     placer = None
-    if config.second_look and config.method in QUERY_FEATURE + ("nift",):
+    if config.second_look and config.method in TEMPLATE_METHODS:
         def placer(cloud: np.ndarray, T_grasp: np.ndarray, starts: np.ndarray) -> list[Candidate]:
             return predict_place(t, cloud, T_grasp, config.method, T_base_fixture, config.demos, config.imitation,
                                  starts, center=config.center_grasp)

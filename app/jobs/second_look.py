@@ -63,7 +63,7 @@ def second_look(arm: Arm, camera: DepthCamera, planner: Planner, T_base_cam: np.
         with planner.scene.holding(OBJECT, T_base_grasp), planner.scene.fingers(width):
             execute(arm, planner.transit(arm.getActualQ(), q, "second look", ignore=(OBJECT,)), tolerance)
         T_view = planner.kin.fk(arm.getActualQ())
-        near = transform_points(T_view @ invert(T_base_grasp), first[None].mean(axis=1))[0]
+        near = transform_points(T_view @ invert(T_base_grasp), first.mean(axis=0, keepdims=True))[0]
         seen = held_object_cloud(camera.capture(), T_base_cam, T_view, width, near, radius, perception,
                                  planner.scene.geometry, config.gripper_margin)
         views.append(to_grasp_frame(seen, T_base_grasp, T_view))

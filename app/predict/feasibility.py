@@ -76,6 +76,12 @@ def grips_something(cloud: np.ndarray, min_points: int = GRIP_POINTS):
     return lambda poses: np.array([len(swept_points(T, cloud)) >= need for T in poses])
 
 
+def demo_carries(demos) -> list[np.ndarray]:
+    """Each demo's T_fixture_tcp = inv(T_base_fixture_seen) @ T_base_tcp: where its TCP held the
+    object relative to the fixture (`demos`: `app.tasks.demo.Demo`s)."""
+    return [invert(d.place_anchor()) @ d.T_base_tcp for d in demos]
+
+
 def carries_like_demos(T_base_tcp: np.ndarray, demos: list[np.ndarray], tolerance: float = CARRY_TOLERANCE):
     """Predicate on place poses (K, 4, 4) (T_base_fixture_seen): the grasp T_base_tcp carried there
     is within `tolerance` in height of some demo's T_fixture_tcp."""

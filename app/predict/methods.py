@@ -2,7 +2,8 @@
 from __future__ import annotations
 
 QUERY_FEATURE = tuple(f"{q}-{f}" for q in ("bps", "ibs") for f in ("ndf", "scf", "nif"))
-METHODS = ("nift", *QUERY_FEATURE, "cpd")  # nift = ibs-nif
+TEMPLATE_METHODS = ("nift", *QUERY_FEATURE)  # imitate templates (Eq. 5); nift = ibs-nif
+METHODS = (*TEMPLATE_METHODS, "cpd")
 
 
 def check_method(method: str) -> str:

@@ -37,7 +37,7 @@ from app.objects import fixture
 from app.predict.candidates import Candidate, excess, ranked_pairs
 from app.predict.carried_grasps import carried_pairs, carried_places
 from app.predict.feasibility import (Reach, all_of, carries_like_demos,
-                                     grips_something, reaches)
+                                     demo_carries, grips_something, reaches)
 from app.predict.grasp_alignment import align_grasp
 from app.predict.grasp_centering import center_grasp
 from app.predict.methods import check_method
@@ -144,11 +144,9 @@ def _predict(t: Task, cloud: np.ndarray, method: str, T_base_fixture: np.ndarray
     reach = reachable if feasible else None
     grips = all_of(grips_something(cloud), reaches(reach) if reach else None) if feasible else None
     grasp = imitate(templates["grasp"], cloud, config, field, grips)
-    carry, carried = None, None
-    if feasible:
-        carried = [invert(d.place_anchor()) @ d.T_base_tcp for d in task_demos(directory)]  # each demo's T_fixture_tcp
-        carry = carries_like_demos(grasp.T, carried)
-    demos_carried = carried or [invert(d.place_anchor()) @ d.T_base_tcp for d in task_demos(directory)]
+    demos_carried = demo_carries(task_demos(directory)) if feasible or carried_grasps else None
+    carried = demos_carried if feasible else None
+    carry = carries_like_demos(grasp.T, carried) if feasible else None
     starts = carried_places(grasp.candidates, demos_carried) if carried_grasps else None
     place = imitate(templates["place"], cloud, config, field, carry, starts)
     pairs = ranked_pairs(grasp, place, T_base_fixture, carried)
@@ -179,7 +177,7 @@ def predict_place(t: Task, cloud: np.ndarray, T_base_tcp: np.ndarray, method: st
     T_base_fixture = CellLayout().fixture_pose(t.fixture) if T_base_fixture is None else T_base_fixture
     query, feature = key.split("-")
     template = task_templates(t, directory, query, feature)["place"]
-    carried = [invert(d.place_anchor()) @ d.T_base_tcp for d in task_demos(directory)]
+    carried = demo_carries(task_demos(directory))
     begin = carried_places(T_base_tcp[None], carried)
     begin = begin if starts is None or len(starts) == 0 else np.concatenate([begin, starts])
     place = imitate(template, cloud, config, None, carries_like_demos(T_base_tcp, carried), begin)

@@ -12,7 +12,7 @@ from pathlib import Path
 from app.nift.template import (StaleTemplate, Template, build_template, field_id, field_override, load_template,
                                save_template, with_demo_features)
 from app.tasks.anchors import anchor_mesh
-from app.tasks.demo import Demo, load_demo
+from app.tasks.demo import DEMO_GLOB, Demo, load_demo
 from app.tasks.task import Task
 
 DEMOS_DIR = Path(__file__).resolve().parents[2] / "demos"
@@ -21,7 +21,7 @@ STAGES = ("grasp", "place")
 
 def task_demos(out: Path) -> list[Demo]:
     """Every demo in a task directory, in name order."""
-    paths = sorted(out.glob("demo-*.npz"))
+    paths = sorted(out.glob(DEMO_GLOB))
     if not paths:
         raise FileNotFoundError(f"no demos in {out}: record some with `nift teach`")
     return [load_demo(p) for p in paths]

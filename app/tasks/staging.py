@@ -17,8 +17,9 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
+from app.tasks.demo import DEMO_GLOB
+
 MODES = ("replace", "add")
-DEMO_GLOB = "demo-*.npz"
 
 
 def demo_count(directory: Path) -> int:
