@@ -11,11 +11,11 @@ import traceback
 from pathlib import Path
 
 from app import __version__
-from app.commands import (bench, bench_cell, bench_field, bench_geometry, bench_imitation, bench_jobs, calibrate,
-                          capture, imitate, make_data, objects, run, sim, teach, train)
+from app.commands import (bench, bench_cell, bench_field, bench_geometry, bench_imitation, bench_jobs, bench_net,
+                          calibrate, capture, devices, imitate, make_data, objects, run, serve, sim, teach, train)
 
-COMMANDS = [run, objects, sim, calibrate, capture, make_data, train, teach, imitate, bench_geometry, bench_cell,
-            bench_field, bench_imitation, bench_jobs, bench]
+COMMANDS = [run, objects, sim, serve, devices, calibrate, capture, make_data, train, teach, imitate, bench_geometry,
+            bench_cell, bench_field, bench_imitation, bench_jobs, bench_net, bench]
 
 
 class OneLineParser(argparse.ArgumentParser):

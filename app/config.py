@@ -55,8 +55,10 @@ def _checked(hint: Any, value: Any, what: str) -> Any:
     return float(value) if hint is float else value
 
 
-def load_toml(cls: type[T], path: str | Path) -> T:
-    """Dataclass `cls` from a TOML file, or a one-line error naming the file and the problem."""
+def load_toml(cls: type[T], path: str | Path, only_known: bool = False) -> T:
+    """Dataclass `cls` from a TOML file, or a one-line error naming the file and the problem
+    (`only_known`: leave out the top-level keys `cls` does not have - a part of a file another
+    process reads whole, as `nift run --devices net` reads the layout of the served cell's file)."""
     path = Path(path)
     if not path.exists():
         raise FileNotFoundError(f"{path}: no such configuration file")
@@ -64,4 +66,7 @@ def load_toml(cls: type[T], path: str | Path) -> T:
         data = tomllib.loads(path.read_text())
     except tomllib.TOMLDecodeError as exc:
         raise ValueError(f"{path}: not valid TOML ({exc})") from exc
+    if only_known:
+        names = {f.name for f in dataclasses.fields(cls)}
+        data = {k: v for k, v in data.items() if k in names}
     return from_dict(cls, data, where=f"{path}: ")

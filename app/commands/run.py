@@ -28,20 +28,17 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--calibration", type=Path, default=Path("calibration.json"),
                    help="camera calibration file; if missing, the cell is calibrated first and it is written")
     p.add_argument("--gui", action="store_true", help="show the PyBullet window")
+    p.add_argument("--devices", default="sim", choices=("sim", "net"),
+                   help="sim: the simulated cell in this process; net: the devices `nift serve` offers, found with "
+                        "zeroconf (give both the same --config)")
+    p.add_argument("--token-file", type=Path, help="shared token of the device servers (--devices net; default: nift serve's)")
     p.add_argument("--json", action="store_true", help="print the result records as JSON")
     add_second_look_argument(p)
     add_config_argument(p)
 
 
 def run(args: argparse.Namespace) -> int:
-    from tqdm import tqdm
-
-    from app.console.options import cell_config
     from app.jobs.job import JobConfig
-    from app.motion.scene import PlanningScene
-    from app.sim.calibration import ensure_calibration
-    from app.sim.cell import SimCell
-    from app.sim.jobs import JobSpec, run_series
     from app.tasks.task import task
 
     if args.jobs < 1:
@@ -49,8 +46,22 @@ def run(args: argparse.Namespace) -> int:
     if args.record is not None and args.record.suffix.lower() != ".png":
         raise ValueError(f"--record {args.record}: key frames are written as a PNG strip; give a .png path")
     t = task(args.task)
-    specs = [JobSpec(t, args.seed + i, args.pose) for i in range(args.jobs)]
     config = JobConfig(method=args.method, demos=args.demos, second_look=args.second_look)
+    results = _run_net(args, t, config) if args.devices == "net" else _run_sim(args, t, config)
+    return _report(results, args, t)
+
+
+def _run_sim(args: argparse.Namespace, t, config) -> list:
+    """The jobs in the simulated cell in this process."""
+    from tqdm import tqdm
+
+    from app.console.options import cell_config
+    from app.motion.scene import PlanningScene
+    from app.sim.calibration import ensure_calibration
+    from app.sim.cell import SimCell
+    from app.sim.jobs import JobSpec, run_series
+
+    specs = [JobSpec(t, args.seed + i, args.pose) for i in range(args.jobs)]
     cell_cfg = cell_config(args, gui=args.gui)
     bar = tqdm(total=len(specs), unit="job", desc=f"nift run {t.name}", disable=len(specs) == 1 or args.json)
     done = []
@@ -66,10 +77,34 @@ def run(args: argparse.Namespace) -> int:
         T_base_cam = ensure_calibration(cell, args.calibration)
         scene = PlanningScene(cell_cfg)
         try:
-            results = run_series(cell, scene, T_base_cam, specs, config, report, args.record)
+            return run_series(cell, scene, T_base_cam, specs, config, report, args.record)
         finally:
             scene.close()
             bar.close()
+
+
+def _run_net(args: argparse.Namespace, t, config) -> list:
+    """The jobs against `nift serve`'s devices (`app.jobs.remote`)."""
+    from dataclasses import replace
+
+    from app.config import load_toml
+    from app.jobs.remote import NetCell, NetCellConfig, remote_calibration, run_remote_series
+    from app.layout import CellLayout
+    from hardware.net.client import NetDeviceConfig
+
+    if args.record is not None or args.gui:
+        raise ValueError("--record and --gui need the simulated cell in this process (--devices sim)")
+    layout = load_toml(CellLayout, args.config, only_known=True) if args.config else CellLayout()
+    device = NetDeviceConfig() if args.token_file is None else NetDeviceConfig(token_file=args.token_file)
+    net = NetCellConfig(device, device, device, replace(device, motion_timeout=600.0))
+    with NetCell(net) as cell:
+        T_base_cam = remote_calibration(cell, args.calibration)
+        on_result = (lambda r: print(_line(r), flush=True)) if args.jobs > 1 and not args.json else (lambda r: None)
+        return run_remote_series(cell, layout, t, [args.seed + i for i in range(args.jobs)], args.pose, T_base_cam,
+                                 config, on_result)
+
+
+def _report(results: list, args: argparse.Namespace, t) -> int:
     if args.json:
         records = [r.record() for r in results]
         print(json.dumps(records[0] if len(records) == 1 else records, indent=2))

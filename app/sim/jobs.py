@@ -76,6 +76,14 @@ def reset_arm(cell: SimCell) -> None:
     cell.gripper.open()
 
 
+def start_job(cell: SimCell, spec: JobSpec) -> SpawnedObject:
+    """The operator's reset, the camera reseeded by the job's seed (its frames follow from the seed
+    alone) and the spec's object spawned."""
+    reset_arm(cell)
+    cell.camera.reseed(np.random.SeedSequence(spec.seed).spawn(1)[0])
+    return spawn_test_object(cell.world, spec.task, spec.pose, np.random.default_rng(spec.seed))
+
+
 def teacher_predictor(cell: SimCell, obj: SpawnedObject, t: Task) -> Predictor:
     """The oracle's poses for the object where it is when the job asks (after a miss it may have moved)."""
     T_base_fixture = cell.config.fixture_pose(t.fixture)
@@ -87,9 +95,7 @@ def run_sim_job(cell: SimCell, scene: PlanningScene, T_base_cam: np.ndarray, spe
                 predictor_of: Callable[[SpawnedObject], Predictor] | None = None) -> JobResult:
     """Spawn the spec's object, run the job, remove the object; the strip goes to `record`
     (`hooks_type`, `predictor_of(object)`: other simulator hooks and poses, for tests)."""
-    reset_arm(cell)
-    cell.camera.reseed(np.random.SeedSequence(spec.seed).spawn(1)[0])  # the job's frames follow from its seed alone
-    obj = spawn_test_object(cell.world, spec.task, spec.pose, np.random.default_rng(spec.seed))
+    obj = start_job(cell, spec)
     hooks = hooks_type(cell, obj, spec.task, record is not None)
     try:
         hooks.keyframe("start")

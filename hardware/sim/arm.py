@@ -48,6 +48,8 @@ class SimArm(Arm):
         self.robot = robot
         self._stopped = False
         self._last_error = ""
+        self._moving = False  # a motion's control loop is running (stopJ from another thread then asks it to stop)
+        self._stop_request: float | None = None  # the deceleration stopJ asked for, until the loop has stopped
         self.max_tracking_error = 0.0  # rad, largest joint error during the last motion
         k = robot.kinematics
         self._limits = JointLimits(k.lower.copy(), k.upper.copy(), k.velocity_limit.copy(),
@@ -149,7 +151,15 @@ class SimArm(Arm):
         return self._track(target, times[-1] - times[0])
 
     def stopJ(self, deceleration: float = 2.0) -> None:
+        """Decelerate to rest; during a motion (called from another thread, as a device server does)
+        the motion's own control loop decelerates at its next step and returns False."""
         self.require_connected()
+        if self._moving:
+            self._stop_request = deceleration
+            return
+        self._decelerate(deceleration)
+
+    def _decelerate(self, deceleration: float) -> None:
         q, qd = self.robot.arm_state()
         t_stop = float(np.abs(qd).max() / max(deceleration, 1e-6))
         q_stop = q + qd * t_stop / 2  # constant deceleration to rest
@@ -168,9 +178,20 @@ class SimArm(Arm):
         world = self.robot.world
         dt = world.config.time_step
         n = int(np.ceil(duration / dt)) + int(self.config.settle_time / dt)
-        q_des = self.getActualQ()
         self.max_tracking_error = 0.0
+        self._moving, self._stop_request = True, None
+        try:
+            return self._follow(target, duration, n, dt)
+        finally:
+            self._moving, self._stop_request = False, None
+
+    def _follow(self, target, duration: float, n: int, dt: float) -> bool:
+        world = self.robot.world
         for i in range(1, n + 1):
+            if self._stop_request is not None:
+                self._decelerate(self._stop_request)
+                self._last_error = "stopped (stopJ)"
+                return False
             try:
                 q_des, qd_des = target(min(i * dt, duration))
             except _NoIK as exc:

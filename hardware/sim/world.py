@@ -5,6 +5,7 @@ top is the plane z = 0, the floor is TABLE_HEIGHT below it.
 """
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -24,6 +25,7 @@ class SimWorldConfig:
     time_step: float = 1.0 / 240.0
     solver_iterations: int = 80
     gravity: float = -9.81
+    realtime: bool = False  # pace the physics to the wall clock (a served cell, where motions take their real time)
 
     def __post_init__(self) -> None:
         check_ranges(self, (("time_step", 0.0, 0.05, "s", False), ("solver_iterations", 1, 10_000, "iterations", True),
@@ -39,6 +41,7 @@ class SimWorld:
         self.table: int | None = None
         self.floor: int | None = None
         self.steps = 0
+        self._clock: tuple[float, int] | None = None  # (wall time, steps) when realtime pacing began
         self.on_step: list = []  # callables run after every physics step (flange accessories)
 
     @property
@@ -90,6 +93,17 @@ class SimWorld:
             for callback in self.on_step:
                 callback()
         self.steps += n
+        if self.config.realtime:
+            self._pace()
+
+    def _pace(self) -> None:
+        """Sleep until the wall clock has caught up with the simulated time (restarting after a pause)."""
+        now = time.monotonic()
+        if self._clock is None or (self.steps - self._clock[1]) * self.config.time_step < now - self._clock[0] - 0.5:
+            self._clock = (now, self.steps)
+        ahead = self._clock[0] + (self.steps - self._clock[1]) * self.config.time_step - now
+        if ahead > 0:
+            time.sleep(ahead)
 
     def add_box(self, size, center, mass: float = 0.0, rgba=(0.6, 0.6, 0.6, 1), friction: float = 0.8) -> int:
         """A box body (static when mass = 0)."""

@@ -1,0 +1,114 @@
+"""Jobs against devices on the network (`nift run --devices net`): the unchanged job
+(`app.jobs.job.run_job`) drives `NetArm`, `NetGripper` and `NetCamera`, found with zeroconf or at
+given addresses; the served cell's test rig (kind "sim", `app.sim.rig`) spawns each job's object
+and judges it. Nothing here imports the simulator: the cell runs in `nift serve`'s process."""
+from __future__ import annotations
+
+import sys
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+from app.jobs.job import JobConfig, JobHooks, JobResult, run_job
+from app.layout import CellLayout
+from app.motion.scene import PlanningScene
+from app.predict.methods import ORACLE
+from app.predict.predict import Prediction
+from app.tasks.task import Task
+from calibration.store import load_calibration, save_calibration
+from hardware.net.client import NetArm, NetCamera, NetClient, NetDeviceConfig, NetGripper, open_client
+
+
+@dataclass(frozen=True)
+class NetCellConfig:
+    """Where each device is (found by kind when no name or address is given)."""
+
+    arm: NetDeviceConfig = NetDeviceConfig()
+    gripper: NetDeviceConfig = NetDeviceConfig()
+    camera: NetDeviceConfig = NetDeviceConfig()
+    rig: NetDeviceConfig = field(default_factory=lambda: NetDeviceConfig(motion_timeout=600.0))
+
+
+class NetCell:
+    """The networked devices and the served cell's rig, connected together."""
+
+    def __init__(self, config: NetCellConfig = NetCellConfig()) -> None:
+        self.config = config
+        self.arm, self.gripper, self.camera = NetArm(config.arm), NetGripper(config.gripper), NetCamera(config.camera)
+        self.rig: NetClient | None = None
+
+    def __enter__(self) -> "NetCell":
+        try:
+            for device in (self.arm, self.gripper, self.camera):
+                device.connect()
+            self.rig, _ = open_client(self.config.rig, "sim")
+        except BaseException:
+            self.__exit__()
+            raise
+        return self
+
+    def __exit__(self, *exc) -> None:
+        for device in (self.camera, self.gripper, self.arm):
+            if device.is_connected:
+                device.disconnect()
+        if self.rig is not None:
+            self.rig.call_quietly("release")
+            self.rig.close()
+
+    def rig_run(self, verb: str, *args):
+        return self.rig.run(verb, *args, timeout=self.config.rig.motion_timeout)
+
+
+class RigHooks(JobHooks):
+    """The served rig's side of a job: let an arbitrary-pose object go once grasped; judge the place."""
+
+    def __init__(self, cell: NetCell) -> None:
+        self.cell = cell
+
+    def on_grasped(self) -> None:
+        self.cell.rig_run("grasped")
+
+    def verify(self, seen: tuple[bool, str]) -> tuple[bool, str]:
+        success, reason = self.cell.rig_run("verify")
+        return bool(success), str(reason)
+
+
+def remote_calibration(cell: NetCell, path: Path) -> np.ndarray:
+    """T_base_cam from the calibration file; if it is missing, the served cell is calibrated and it is written."""
+    if not path.exists():
+        print(f"no calibration file {path}: calibrating the served cell first", file=sys.stderr)
+        r = cell.rig_run("calibrate")
+        save_calibration(path, np.asarray(r["T_base_cam"]), r["record"])
+    return load_calibration(path)[0]
+
+
+def _oracle(cell: NetCell) -> Callable[[np.ndarray], Prediction]:
+    def predict(cloud: np.ndarray) -> Prediction:
+        r = cell.rig_run("oracle")
+        return Prediction(ORACLE, *(np.asarray(r[k]) for k in ("T_base_tcp", "T_base_fixture_seen", "motion")))
+    return predict
+
+
+def run_remote_series(cell: NetCell, layout: CellLayout, t: Task, seeds: list[int], pose: str, T_base_cam: np.ndarray,
+                      config: JobConfig = JobConfig(),
+                      on_result: Callable[[JobResult], None] = lambda r: None) -> list[JobResult]:
+    """One job per seed on the networked cell; the planning scene is built from `layout`, which
+    must be the served cell's (the same --config on both sides)."""
+    scene = PlanningScene(layout)
+    results = []
+    try:
+        for seed in seeds:
+            info = cell.rig_run("prepare", t.name, seed, pose)
+            try:
+                result = run_job(t, cell.arm, cell.gripper, cell.camera, T_base_cam, layout.fixture_pose(t.fixture),
+                                 scene, config, RigHooks(cell), _oracle(cell) if config.method == ORACLE else None)
+            finally:
+                cell.rig_run("clear")
+            result.info = {**info, "devices": "net"}
+            results.append(result)
+            on_result(result)
+    finally:
+        scene.close()
+    return results

@@ -1,0 +1,285 @@
+"""`DeviceServer`: devices behind one ZeroMQ ROUTER socket.
+
+Every request carries the shared token (refused and logged without it; the device does not move)
+and is checked before it reaches a device (`hardware.net.checks`, in the verb tables of
+`hardware.net.verbs`); a malformed or oversized message gets an error reply and the server keeps
+serving. One client commands a device at a time: the first to send it a command holds it until it
+says "release" or stays silent for `lease` seconds with nothing running; another client may read
+its state, and stop it, but not command it. Motions run on one motion thread (the simulated
+devices share one physics world), so the socket keeps answering while they run: state reads,
+"result" polls and stopJ. A watchdog (ur_rtde's setWatchdog/kickWatchdog) stops a running arm
+motion when its client has sent nothing for 1 / min_frequency seconds; any message is a kick, and
+a waiting client's "result" polls keep it fed.
+"""
+from __future__ import annotations
+
+import hmac
+import itertools
+import logging
+import threading
+import time
+from concurrent.futures import Future, ThreadPoolExecutor
+from dataclasses import dataclass, field
+from typing import Any
+
+import zmq
+
+from hardware.net import wire
+from hardware.net.verbs import Service
+
+LOG = logging.getLogger("nift.net")
+LOOPBACK = ("127.0.0.1", "localhost", "::1")
+BUILTIN = ("hello", "result", "release", "setWatchdog", "kickWatchdog")
+KEPT_RESULTS = 256  # finished jobs remembered for their "result" poll
+
+
+@dataclass(frozen=True)
+class ServerConfig:
+    """Where the server listens and how it guards its devices."""
+
+    token: str
+    bind: str = "127.0.0.1"
+    port: int = 0  # 0: a free port, chosen at start
+    watchdog: float = 0.5  # s: default silence after which a running arm motion is stopped
+    lease: float = 10.0  # s: a silent commanding client with nothing running gives up control
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.token, str) or len(self.token) < 16:
+            raise ValueError("the device server needs a token of at least 16 characters")
+        if not 0 <= self.port <= 65535:
+            raise ValueError(f"port must be in [0, 65535], got {self.port}")
+        if not (0.0 < self.watchdog <= 60.0 and 0.0 < self.lease <= 3600.0):
+            raise ValueError("watchdog must be in (0, 60] s and lease in (0, 3600] s")
+
+
+class Refused(Exception):
+    """A request the server will not carry out: (error name, message)."""
+
+    def __init__(self, name: str, message: str) -> None:
+        super().__init__(message)
+        self.name = name
+
+
+@dataclass
+class _Job:
+    future: Future
+    device: str
+    client: str
+    note: str = ""  # why the server stopped it (watchdog)
+
+
+@dataclass
+class _Control:
+    client: str
+    since: float
+    watchdog: float
+
+
+@dataclass
+class DeviceServer:
+    """Serves `services` ({name: Service}) until `stop()`; `port` is known after `start()`."""
+
+    services: dict[str, Service]
+    config: ServerConfig
+    port: int = 0
+    _seen: dict[str, float] = field(default_factory=dict)
+    _control: dict[str, _Control] = field(default_factory=dict)
+    _jobs: dict[int, _Job] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        self._ids = itertools.count(1)
+        self._stop = threading.Event()
+        self._context = zmq.Context.instance()
+        self._socket: zmq.Socket | None = None
+        self._worker = ThreadPoolExecutor(max_workers=1, thread_name_prefix="nift-motion")
+
+    # lifecycle ---------------------------------------------------------------------------------
+    def start(self) -> int:
+        """Bind the socket; the port it listens on."""
+        s = self._context.socket(zmq.ROUTER)
+        s.setsockopt(zmq.LINGER, 0)
+        s.setsockopt(zmq.MAXMSGSIZE, 4 * wire.MAX_MESSAGE)  # far larger: the peer is cut off, never buffered
+        if self.config.port:
+            s.bind(f"tcp://{self.config.bind}:{self.config.port}")
+            self.port = self.config.port
+        else:
+            self.port = s.bind_to_random_port(f"tcp://{self.config.bind}")
+        self._socket = s
+        LOG.info("serving %s on %s:%d", ", ".join(self.services), self.config.bind, self.port)
+        return self.port
+
+    def stop(self) -> None:
+        """Ask `serve_forever` to return."""
+        self._stop.set()
+
+    def close(self) -> None:
+        """Stop every device that moves, close the socket, end the motion thread."""
+        for name, svc in self.services.items():
+            if "stopJ" in svc.verbs and self._running(name):
+                self._safe_stop(name, "server shutting down")
+        self._worker.shutdown(wait=True, cancel_futures=True)
+        if self._socket is not None:
+            self._socket.close(0)
+            self._socket = None
+
+    def serve_forever(self, poll_ms: int = 10) -> None:
+        """Answer requests until `stop()`; check the watchdog between them."""
+        if self._socket is None:
+            self.start()
+        poller = zmq.Poller()
+        poller.register(self._socket, zmq.POLLIN)
+        while not self._stop.is_set():
+            if poller.poll(poll_ms):
+                self._answer(self._socket.recv_multipart())
+            self._watch()
+
+    # one request -------------------------------------------------------------------------------
+    def _answer(self, frames: list[bytes]) -> None:
+        if len(frames) < 2:
+            return  # no return address: nothing can be answered
+        head, payload = frames[:-1], frames[-1]
+        try:
+            reply = wire.reply_ok(self._handle(payload))
+        except Refused as r:
+            reply = wire.reply_error(r.name, str(r))
+        except wire.WireError as exc:
+            LOG.warning("malformed request refused: %s", exc)
+            reply = wire.reply_error("WireError", str(exc))
+        try:
+            self._socket.send_multipart([*head, reply])
+        except zmq.ZMQError as exc:
+            LOG.warning("reply not sent: %s", exc)
+
+    def _handle(self, payload: bytes) -> Any:
+        message = wire.unpack(payload)
+        if message.get("v") != wire.PROTOCOL:
+            raise Refused("ProtocolError", f"protocol version {message.get('v')!r}; this server speaks {wire.PROTOCOL}")
+        client = message.get("client")
+        if not isinstance(client, str) or not 0 < len(client) <= 100:
+            raise Refused("WireError", "a request must name its client (a string of 1-100 characters)")
+        token = message.get("token")
+        if not isinstance(token, str) or not hmac.compare_digest(token.encode(), self.config.token.encode()):
+            LOG.warning("refused a request from client %r: wrong token", client[:40])
+            raise Refused("Unauthorized", "wrong or missing token: request refused")
+        device, verb, args = self._resolve(message.get("device")), message.get("verb"), message.get("args", [])
+        if device not in self.services:
+            raise Refused("UnknownDevice", f"no device {device!r} here (serving: {', '.join(self.services)})")
+        if not isinstance(args, list):
+            raise Refused("WireError", "args must be a list")
+        self._seen[client] = time.monotonic()
+        if verb in BUILTIN:
+            return self._builtin(client, device, verb, args)
+        svc = self.services[device]
+        spec = svc.verbs.get(verb) if isinstance(verb, str) else None
+        if spec is None:
+            raise Refused("UnknownVerb", f"{svc.kind} {device!r} has no verb {verb!r}")
+        if len(args) > spec.most_args:
+            raise Refused("ValueError", f"{verb} takes at most {spec.most_args} arguments, got {len(args)}")
+        if spec.kind in ("command", "motion"):
+            self._claim(client, device)
+        if spec.kind in ("motion", "work"):
+            return {"job": self._submit(client, device, lambda: spec.call(svc.device, args))}
+        return self._call(lambda: spec.call(svc.device, args))
+
+    def _resolve(self, device: Any) -> Any:
+        """A device's name, or its kind when exactly one device of that kind is served."""
+        if device in self.services:
+            return device
+        named = [n for n, svc in self.services.items() if svc.kind == device]
+        return named[0] if len(named) == 1 else device
+
+    def _builtin(self, client: str, device: str, verb: str, args: list) -> Any:
+        svc = self.services[device]
+        if verb == "hello":
+            return {"kind": svc.kind, "protocol": wire.PROTOCOL, "properties": svc.properties,
+                    "controlled_by_other": device in self._control and self._control[device].client != client}
+        if verb == "result":
+            return self._result(client, args[0] if args else None)
+        if verb == "release":
+            if device in self._control and self._control[device].client == client:
+                del self._control[device]
+            return None
+        if verb == "kickWatchdog":
+            return None
+        # setWatchdog(min_frequency): the client must talk at least this often while its motion runs
+        if not svc.watchdog:
+            raise Refused("UnknownVerb", f"{svc.kind} {device!r} has no watchdog")
+        freq = args[0] if args else None
+        if isinstance(freq, bool) or not isinstance(freq, (int, float)) or not 0.1 <= freq <= 1000:
+            raise Refused("ValueError", f"setWatchdog needs a minimum frequency in [0.1, 1000] Hz, got {freq!r}")
+        self._claim(client, device)
+        self._control[device].watchdog = 1.0 / float(freq)
+        return None
+
+    # control, jobs, watchdog -------------------------------------------------------------------
+    def _claim(self, client: str, device: str) -> None:
+        now = time.monotonic()
+        held = self._control.get(device)
+        if held is not None and held.client != client:
+            silent = now - self._seen.get(held.client, 0.0)
+            if self._running(device) or silent < self.config.lease:
+                LOG.warning("refused %r commanding %s: client %r commands it", client[:40], device, held.client[:40])
+                raise Refused("Busy", f"{device} is commanded by another client ({held.client[:40]}, for "
+                                      f"{now - held.since:.1f} s); a second client may read it but not command it")
+            LOG.info("%s: control passes from silent client %r to %r", device, held.client[:40], client[:40])
+            held = None
+        if held is None:
+            self._control[device] = _Control(client, now, self.config.watchdog)
+
+    def _submit(self, client: str, device: str, work) -> int:
+        job_id = next(self._ids)
+        self._jobs[job_id] = _Job(self._worker.submit(self._call, work), device, client)
+        done = [k for k, j in self._jobs.items() if j.future.done()]
+        for k in done[:-KEPT_RESULTS]:
+            del self._jobs[k]
+        return job_id
+
+    def _result(self, client: str, job_id: Any) -> dict:
+        job = self._jobs.get(job_id) if isinstance(job_id, int) else None
+        if job is None:
+            raise Refused("ValueError", f"no job {job_id!r} on this server")
+        if not job.future.done():
+            return {"done": False}
+        del self._jobs[job_id]
+        error = job.future.exception()
+        if isinstance(error, Refused):
+            raise error
+        return {"done": True, "value": job.future.result(), "note": job.note}
+
+    def _running(self, device: str) -> bool:
+        return any(j.device == device and not j.future.done() for j in self._jobs.values())
+
+    def _watch(self) -> None:
+        now = time.monotonic()
+        for job in list(self._jobs.values()):
+            if job.future.done() or job.note or not self.services[job.device].watchdog:
+                continue
+            control = self._control.get(job.device)
+            limit = control.watchdog if control else self.config.watchdog
+            silent = now - self._seen.get(job.client, 0.0)
+            if silent > limit:
+                job.note = f"watchdog: no message from the client for {silent:.2f} s (limit {limit:.2f} s); arm stopped"
+                self._safe_stop(job.device, job.note)
+
+    def _safe_stop(self, device: str, why: str) -> None:
+        LOG.warning("%s: %s", device, why)
+        try:
+            self.services[device].device.stopJ()
+        except Exception:  # noqa: BLE001 - a failing stop is logged; the server keeps serving
+            LOG.exception("%s: stopJ failed", device)
+
+    @staticmethod
+    def _call(work) -> Any:
+        """Run a device call; what it raises becomes an error reply naming its type."""
+        try:
+            return work()
+        except Refused:
+            raise
+        except ValueError as exc:
+            raise Refused("ValueError", str(exc)) from None
+        except Exception as exc:  # noqa: BLE001 - a device's error goes back to the client by name
+            name = type(exc).__name__
+            if name not in ("ProtectiveStopError", "DeviceNotConnectedError", "TimeoutError"):
+                LOG.exception("device call failed")
+                name = "DeviceError"
+            raise Refused(name, str(exc)) from None

@@ -1,0 +1,203 @@
+"""Hardware-in-the-loop: `nift serve` in another process on loopback, and the faults a network and
+a controller produce. Each server is started as a user would and stopped at the end; no process
+or port is left behind (checked)."""
+import socket
+import threading
+import time
+
+import numpy as np
+import pytest
+import zmq
+
+from app.bench.served import served_cell
+from hardware.interfaces import ProtectiveStopError
+from hardware.net import wire
+from hardware.net.client import DeviceRefusedError, NetArm, NetClient, NetDeviceConfig, NetGripper
+from hardware.net.discovery import DeviceNotFoundError, find
+from hardware.net.token import read_token
+from hardware.robot_description import HOME_Q
+
+pytestmark = pytest.mark.hil
+FAR = np.array(HOME_Q) + [0.8, 0.3, -0.3, 0.3, 0.0, 0.8]  # free space, ~2 s of motion
+
+
+def _port_open(address: str) -> bool:
+    host, port = address.removeprefix("tcp://").rsplit(":", 1)
+    with socket.socket() as s:
+        s.settimeout(0.5)
+        return s.connect_ex((host, int(port))) == 0
+
+
+@pytest.fixture(scope="module")
+def server(tmp_path_factory):
+    """A realtime served cell (motions take their real time, as on a controller)."""
+    token_file = tmp_path_factory.mktemp("hil") / "token"
+    with served_cell(token_file, "--realtime", "--name", "nift-test", "--watchdog", "0.3") as (address, proc):
+        yield address, read_token(token_file), proc
+    assert proc.returncode is not None and not _port_open(address)  # nothing left behind
+
+
+def _arm(server, **kw) -> NetArm:
+    address, token, _ = server
+    arm = NetArm(NetDeviceConfig(address=address, token=token, **kw))
+    arm.connect()
+    return arm
+
+
+@pytest.fixture
+def arm(server):
+    a = _arm(server)
+    a.unlockProtectiveStop()
+    if np.abs(a.getActualQ() - HOME_Q).max() > 1e-3:
+        assert a.moveJ(HOME_Q, speed=3.0, acceleration=8.0)
+    yield a
+    a.disconnect()
+
+
+def test_state_reads_round_trip(arm):
+    q = arm.getActualQ()
+    assert q.shape == (6,) and np.abs(q - HOME_Q).max() < 1e-3
+    assert np.allclose(arm.getForwardKinematics(q), arm.getActualTCPPose(), atol=1e-6)
+    assert arm.joint_limits.contains(q) and not arm.isProtectiveStopped()
+
+
+def test_a_motion_over_the_network_arrives(arm):
+    target = np.array(HOME_Q) + [0.2, 0.0, 0.0, 0.0, 0.0, 0.2]
+    assert arm.moveJ(target, speed=3.0, acceleration=8.0)
+    assert np.abs(arm.getActualQ() - target).max() < 0.01
+
+
+def test_a_wrong_token_is_refused_and_the_arm_does_not_move(server, arm):
+    address, _, _ = server
+    intruder = NetClient(address, "x" * 32, "arm")
+    with pytest.raises(DeviceRefusedError, match="token"):
+        intruder.call("moveJ", FAR)
+    intruder.close()
+    time.sleep(0.3)
+    assert np.abs(arm.getActualQ() - HOME_Q).max() < 1e-3
+
+
+def test_garbage_and_oversized_messages_get_an_error_reply_and_the_server_keeps_serving(server, arm):
+    address, _, _ = server
+    s = zmq.Context.instance().socket(zmq.REQ)
+    s.setsockopt(zmq.RCVTIMEO, 5000)
+    s.setsockopt(zmq.LINGER, 0)
+    s.connect(address)
+    for payload in (b"\x93garbage", b"\x00" * (wire.MAX_MESSAGE + 1)):
+        s.send(payload)
+        reply = wire.unpack(s.recv())
+        assert not reply["ok"] and reply["error"] == "WireError"
+    s.close()
+    assert arm.getActualQ().shape == (6,)
+
+
+def test_nan_joints_and_trajectories_outside_the_limits_are_refused(arm):
+    with pytest.raises(ValueError, match="finite"):
+        arm.moveJ(np.full(6, np.nan))
+    q0 = arm.getActualQ()
+    beyond = np.linspace(q0, q0 + [0, 0, 0, 0, 0, 10.0], 20)
+    with pytest.raises(ValueError, match="joint limits"):
+        arm.executeTrajectory(np.linspace(0, 2, 20), beyond)
+    assert np.abs(arm.getActualQ() - q0).max() < 1e-3
+
+
+def test_a_second_client_may_read_but_not_command(server, arm):
+    assert arm.moveJ(np.array(HOME_Q) + [0.1, 0, 0, 0, 0, 0], speed=3.0, acceleration=8.0)  # arm now commands
+    other = _arm(server)
+    try:
+        assert other.getActualQ().shape == (6,)
+        with pytest.raises(DeviceRefusedError, match="commanded by another client"):
+            other.moveJ(HOME_Q)
+        arm.disconnect()  # releases the arm
+        assert other.moveJ(HOME_Q, speed=3.0, acceleration=8.0)
+    finally:
+        other.disconnect()
+        arm.connect()
+
+
+def test_stopJ_is_answered_while_a_motion_runs(arm, server):
+    outcome = {}
+    mover = threading.Thread(target=lambda: outcome.update(arrived=arm.moveJ(FAR, speed=1.0, acceleration=2.0)))
+    mover.start()
+    time.sleep(0.5)
+    start = time.monotonic()
+    arm.stopJ()
+    answered = time.monotonic() - start
+    mover.join(10)
+    assert answered < 0.2 and outcome["arrived"] is False
+    assert np.abs(arm.getActualQ() - FAR).max() > 0.1 and np.abs(arm.getActualQd()).max() < 0.05
+    assert "stop" in arm.getLastError()
+
+
+def test_the_watchdog_stops_the_arm_when_its_client_falls_silent(server, arm):
+    address, token, _ = server
+    silent = NetClient(address, token, "arm")
+    arm.disconnect()  # the silent client takes the arm
+    silent.call("moveJ", FAR, 1.0, 2.0)  # submitted; then the client says nothing more
+    time.sleep(1.5)
+    watcher = _arm(server)
+    try:
+        q = watcher.getActualQ()
+        assert np.abs(q - FAR).max() > 0.1  # stopped short of the target
+        assert np.abs(watcher.getActualQd()).max() < 0.05  # and at rest
+    finally:
+        silent.call("release")
+        silent.close()
+        watcher.disconnect()
+        arm.connect()
+
+
+def test_a_protective_stop_reaches_the_client_as_the_same_error(arm):
+    into_table = np.array(HOME_Q) + [0.0, 1.3, 0.0, 0.0, 0.0, 0.0]
+    assert arm.moveJ(into_table, speed=1.0, acceleration=4.0) is False
+    assert arm.isProtectiveStopped() and "protective stop" in arm.getLastError()
+    with pytest.raises(ProtectiveStopError):
+        arm.moveJ(HOME_Q)
+    arm.unlockProtectiveStop()
+    assert arm.moveJ(HOME_Q, speed=1.0, acceleration=4.0)
+
+
+def test_the_gripper_is_served_as_well(server):
+    address, token, _ = server
+    g = NetGripper(NetDeviceConfig(address=address, token=token))
+    with g:
+        g.open()
+        assert abs(g.width - g.stroke) < 0.005 and not g.object_detected
+        with pytest.raises(ValueError, match="force"):
+            g.close(force=-1.0)
+
+
+def test_discovery_finds_devices_by_kind_and_names_what_it_found(server):
+    address, _, _ = server
+    assert find("arm", "nift-test-arm", timeout=5.0).address == address
+    with pytest.raises(DeviceNotFoundError, match="found .*nift-test-arm"):
+        find("arm", "no-such-arm", timeout=1.5)
+
+
+@pytest.mark.slow
+def test_the_whole_job_over_the_network_matches_the_in_process_cell(tmp_path):
+    """`nift run --devices net` against `nift serve` in another process: the same poses and outcome
+    as the in-process cell on the same seed."""
+    from app.jobs.job import JobConfig
+    from app.jobs.remote import NetCell, NetCellConfig, run_remote_series
+    from app.layout import CellLayout
+    from app.motion.scene import PlanningScene
+    from app.sim.cell import CellConfig, SimCell
+    from app.sim.jobs import JobSpec, run_sim_job
+    from app.tasks.task import task
+    from calibration.store import load_calibration
+
+    T_base_cam = load_calibration("calibration.json")[0]
+    with served_cell(tmp_path / "token", "--no-advertise") as (address, proc):
+        device = NetDeviceConfig(address=address, token=read_token(tmp_path / "token"))
+        with NetCell(NetCellConfig(device, device, device, device)) as cell:
+            [net] = run_remote_series(cell, CellLayout(), task("bowl"), [0], "upright", T_base_cam, JobConfig())
+    assert proc.returncode is not None and not _port_open(address)
+    with SimCell(CellConfig()) as cell:
+        scene = PlanningScene(CellConfig())
+        local = run_sim_job(cell, scene, T_base_cam, JobSpec(task("bowl"), 0, "upright"))
+        scene.close()
+    assert net.success and local.success, (net.reason, local.reason)
+    for stage in ("grasp", "place"):
+        assert np.allclose(net.poses[stage], local.poses[stage], atol=1e-4)
+    assert net.info["instance"] == local.info["instance"]

@@ -1,0 +1,86 @@
+"""The device network's pieces without a server: the wire format, the argument checks, the token file."""
+import os
+import stat
+
+import msgpack
+import numpy as np
+import pytest
+
+from hardware.interfaces import JointLimits
+from hardware.net import checks, wire
+from hardware.net.token import ensure_token, read_token
+
+LIMITS = JointLimits(-np.full(6, 6.0), np.full(6, 6.0), np.full(6, 3.0), np.full(6, 8.0), np.full(6, 60.0))
+
+
+@pytest.mark.parametrize("array", [np.arange(6, dtype=np.float64) / 7, np.zeros((424, 512), np.float32),
+                                   np.full((4, 5, 3), 7, np.uint8), np.array([True, False]), np.zeros((0, 6))])
+def test_arrays_round_trip_bit_for_bit(array):
+    back = wire.unpack(wire.pack({"x": array}))["x"]
+    assert back.dtype == array.dtype and back.shape == array.shape and np.array_equal(back, array)
+
+
+def test_a_depth_frame_travels_as_its_bytes_not_a_list():
+    depth = np.random.default_rng(0).random((424, 512)).astype(np.float32)
+    assert len(wire.pack({"depth": depth})) < depth.nbytes + 100  # a JSON list would be ~10x larger
+
+
+@pytest.mark.parametrize("payload", [
+    b"\x00\x01garbage",  # not msgpack
+    msgpack.packb([1, 2, 3]),  # not a map
+    msgpack.packb({"x": msgpack.ExtType(9, b"pickle?")}),  # an unknown extension
+    msgpack.packb({"x": msgpack.ExtType(wire.ARRAY, msgpack.packb(["|O", [1], b"\x80\x04."]))}),  # object dtype
+    msgpack.packb({"x": msgpack.ExtType(wire.ARRAY, msgpack.packb(["<f8", [1000], b"\x00" * 8]))}),  # short data
+    b"\xc6" + (wire.MAX_MESSAGE + 10).to_bytes(4, "big"),  # a bin header claiming more than the limit
+])
+def test_malformed_messages_are_refused_by_name(payload):
+    with pytest.raises(wire.WireError):
+        wire.unpack(payload)
+
+
+def test_an_oversized_message_is_refused_before_parsing():
+    with pytest.raises(wire.WireError, match="over the"):
+        wire.unpack(b"\x00" * (wire.MAX_MESSAGE + 1))
+
+
+def test_joint_checks_refuse_nan_wrong_shape_and_out_of_limits():
+    assert np.array_equal(checks.joints([0.1] * 6, LIMITS), np.full(6, 0.1))
+    for bad, why in (([np.nan] * 6, "finite"), ([0.0] * 5, "6 numbers"), ([7.0] * 6, "joint limits"),
+                     ("abcdef", "array of numbers"), ([[0.0] * 6], "6 numbers")):
+        with pytest.raises(ValueError, match=why):
+            checks.joints(bad, LIMITS)
+
+
+def test_trajectory_checks():
+    t, q = np.linspace(0, 1, 5), np.zeros((5, 6))
+    assert checks.trajectory(t, q, None, LIMITS)[1].shape == (5, 6)
+    with pytest.raises(ValueError, match="increase"):
+        checks.trajectory(t[::-1], q, None, LIMITS)
+    with pytest.raises(ValueError, match="sample 3"):
+        checks.trajectory(t, np.vstack([q[:3], np.full((2, 6), 9.0)]), None, LIMITS)
+    with pytest.raises(ValueError, match="velocity"):
+        checks.trajectory(t, q, np.full((5, 6), 5.0), LIMITS)
+
+
+def test_poses_beyond_the_workspace_are_refused():
+    with pytest.raises(ValueError, match="workspace"):
+        checks.pose([441.0, 0, 0, 0, 0, 0])
+
+
+def test_token_file_is_private_and_reused(tmp_path):
+    path = tmp_path / "cfg" / "token"
+    token = ensure_token(path)
+    assert stat.S_IMODE(path.stat().st_mode) == 0o600 and len(token) >= 16
+    assert ensure_token(path) == token == read_token(path)
+    os.chmod(path, 0o644)
+    with pytest.raises(PermissionError, match="readable by others"):
+        read_token(path)
+
+
+def test_serve_refuses_a_public_address_without_an_explicit_token():
+    from app.commands.serve import check_bind
+
+    check_bind("127.0.0.1", None)
+    with pytest.raises(ValueError, match="--token-file"):
+        check_bind("0.0.0.0", None)
+    check_bind("0.0.0.0", "token")
