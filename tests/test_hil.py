@@ -75,6 +75,7 @@ def test_a_wrong_token_is_refused_and_the_arm_does_not_move(server, arm):
     intruder.close()
     time.sleep(0.3)
     assert np.abs(arm.getActualQ() - HOME_Q).max() < 1e-3
+    assert any("wrong token" in line for line in server[2].log)  # and it was logged
 
 
 def test_garbage_and_oversized_messages_get_an_error_reply_and_the_server_keeps_serving(server, arm):
@@ -172,6 +173,16 @@ def test_discovery_finds_devices_by_kind_and_names_what_it_found(server):
     assert find("arm", "nift-test-arm", timeout=5.0).address == address
     with pytest.raises(DeviceNotFoundError, match="found .*nift-test-arm"):
         find("arm", "no-such-arm", timeout=1.5)
+
+
+def test_one_device_can_be_served_alone(tmp_path):
+    with served_cell(tmp_path / "token", "--devices", "gripper", "--no-advertise") as (address, proc):
+        device = NetDeviceConfig(address=address, token=read_token(tmp_path / "token"))
+        with NetGripper(device) as g:
+            assert g.stroke > 0.05
+        with pytest.raises(DeviceRefusedError, match="serving: nift-sim-gripper"):
+            NetArm(device).connect()
+    assert proc.returncode is not None and not _port_open(address)
 
 
 @pytest.mark.slow

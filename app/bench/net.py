@@ -2,8 +2,9 @@
 
     state read        getActualQ round trips, median and p99 (ms)
     streaming         joint states read per second, back to back
-    depth frame       a 512 x 424 capture over the network, and the same capture in-process (ms):
-                      their difference is the delivery
+    depth frame       delivering the last 512 x 424 RGB-D frame (depth float32 and colour, 1.5 MB)
+                      over the network (ms); and a whole capture (render + delivery) over the
+                      network against one in-process
     job wall time     the same seeds in-process and against `nift serve` (s)
 """
 from __future__ import annotations
@@ -28,26 +29,51 @@ def _ms(samples: list[float]) -> tuple[float, float]:
     return round(float(np.median(a)), 3), round(float(np.percentile(a, 99)), 3)
 
 
-def _in_process(jobs: int, t, method: str, seed: int, T_base_cam: np.ndarray, frames: int) -> tuple[list, list]:
+def _stage_medians(runs: list) -> dict[str, float]:
+    stages = {k for _, _, seconds in runs for k in seconds}
+    return {k: round(float(np.median([sec.get(k, 0.0) for _, _, sec in runs])), 3) for k in sorted(stages)}
+
+
+def _captures(camera, frames: int) -> list[float]:
+    shots = []
+    for _ in range(frames):
+        start = time.perf_counter()
+        camera.capture()
+        shots.append(time.perf_counter() - start)
+    return shots
+
+
+def _paired_jobs(net: NetCell, t, method: str, seeds: list[int], T_base_cam: np.ndarray) -> tuple[list, list]:
+    """Each seed's job over the network and in-process, one planning scene for both, the order
+    alternating from seed to seed (so neither always runs first):
+    ([(wall s, success, stage seconds)] net, the same in-process)."""
     from app.motion.scene import PlanningScene
     from app.sim.cell import CellConfig, SimCell
     from app.sim.jobs import JobSpec, run_sim_job
 
-    walls, captures = [], []
+    remote, local = [], []
     with SimCell(CellConfig()) as cell:
-        for _ in range(frames):
-            start = time.perf_counter()
-            cell.camera.capture()
-            captures.append(time.perf_counter() - start)
         scene = PlanningScene(CellConfig())
         try:
-            for i in range(jobs):
-                start = time.perf_counter()
-                r = run_sim_job(cell, scene, T_base_cam, JobSpec(t, seed + i, "upright"), JobConfig(method=method))
-                walls.append((time.perf_counter() - start, r.success))
+            for i, seed in enumerate(seeds):
+                for where in ("net", "local") if i % 2 == 0 else ("local", "net"):  # each order half the time
+                    start = time.perf_counter()
+                    if where == "net":
+                        [r] = run_remote_series(net, CellLayout(), t, [seed], "upright", T_base_cam,
+                                                JobConfig(method=method), scene=scene)
+                    else:
+                        r = run_sim_job(cell, scene, T_base_cam, JobSpec(t, seed, "upright"), JobConfig(method=method))
+                    (remote if where == "net" else local).append((time.perf_counter() - start, r.success, r.seconds))
         finally:
             scene.close()
-    return walls, captures
+    return remote, local
+
+
+def _in_process_captures(frames: int) -> list[float]:
+    from app.sim.cell import CellConfig, SimCell
+
+    with SimCell(CellConfig()) as cell:
+        return _captures(cell.camera, frames)
 
 
 def run_net_benchmark(reads: int, frames: int, jobs: int, task_name: str = "bowl", method: str = "nift",
@@ -79,28 +105,26 @@ def run_net_benchmark(reads: int, frames: int, jobs: int, task_name: str = "bowl
             device = NetDeviceConfig(address=address, token=token)
             with NetCell(NetCellConfig(device, device, device, NetDeviceConfig(address=address, token=token,
                                                                                motion_timeout=600.0))) as cell:
-                shots = []
+                figures["capture_net_median_ms"] = _ms(_captures(cell.camera, frames))[0]
+                camera = NetClient(address, token, "camera")
+                sent = []
                 for _ in range(frames):
                     start = time.perf_counter()
-                    cell.camera.capture()
-                    shots.append(time.perf_counter() - start)
-                figures["depth_frame_net_median_ms"], figures["depth_frame_net_p99_ms"] = _ms(shots)
-                net_walls = []
-                if jobs:
-                    def timed(r):
-                        net_walls.append((time.perf_counter() - timed.start, r.success))
-                        timed.start = time.perf_counter()
-                    timed.start = time.perf_counter()
-                    run_remote_series(cell, CellLayout(), t, [seed + i for i in range(jobs)], "upright", T_base_cam,
-                                      JobConfig(method=method), timed)
-    walls, captures = _in_process(jobs, t, method, seed, T_base_cam, frames)
-    figures["depth_frame_in_process_median_ms"] = _ms(captures)[0]
-    figures["depth_frame_delivery_ms"] = round(figures["depth_frame_net_median_ms"] - figures["depth_frame_in_process_median_ms"], 3)
+                    frame = camera.call("last_frame")
+                    sent.append(time.perf_counter() - start)
+                camera.close()
+                if frame["depth"].shape != (424, 512):
+                    raise RuntimeError(f"the served camera sent a {frame['depth'].shape} depth frame, not 424 x 512")
+                figures["depth_frame_delivery_median_ms"], figures["depth_frame_delivery_p99_ms"] = _ms(sent)
+                net_walls, walls = _paired_jobs(cell, t, method, [seed + i for i in range(jobs)], T_base_cam)
+    figures["capture_in_process_median_ms"] = _ms(_in_process_captures(frames))[0]
     if jobs:
         figures["jobs"] = f"{jobs} {t.name} jobs, seeds {seed}-{seed + jobs - 1}, {method}"
-        figures["job_wall_in_process_s"] = round(float(np.mean([w for w, _ in walls])), 2)
-        figures["job_wall_net_s"] = round(float(np.mean([w for w, _ in net_walls])), 2)
+        figures["job_wall_in_process_s"] = round(float(np.mean([w for w, _, _ in walls])), 2)
+        figures["job_wall_net_s"] = round(float(np.mean([w for w, _, _ in net_walls])), 2)
         figures["job_net_slowdown"] = round(figures["job_wall_net_s"] / figures["job_wall_in_process_s"] - 1, 3)
-        figures["success_in_process"] = f"{sum(s for _, s in walls)}/{jobs}"
-        figures["success_net"] = f"{sum(s for _, s in net_walls)}/{jobs}"
+        figures["success_in_process"] = f"{sum(s for _, s, _ in walls)}/{jobs}"
+        figures["success_net"] = f"{sum(s for _, s, _ in net_walls)}/{jobs}"
+        figures["stage_median_seconds_in_process"] = _stage_medians(walls)
+        figures["stage_median_seconds_net"] = _stage_medians(net_walls)
     return figures

@@ -19,13 +19,15 @@ SERVING = re.compile(r"serving (.+) on (tcp://[\d.]+:\d+)")
 
 @contextmanager
 def served_cell(token_file: Path, *extra: str, start_timeout: float = 120.0) -> Iterator[tuple[str, subprocess.Popen]]:
-    """(address, process) of a `nift serve --token-file token_file EXTRA...` running until the block ends."""
+    """(address, process) of a `nift serve --token-file token_file EXTRA...` running until the block ends;
+    `process.log` holds the lines of its log (stderr) so far."""
     command = [sys.executable, "-c", "from app.cli import main; raise SystemExit(main())", "serve",
                "--token-file", str(token_file), *extra]
     env = {**os.environ, "PYTHONUNBUFFERED": "1"}
     proc = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
     errors: list[str] = []
     threading.Thread(target=lambda: errors.extend(proc.stderr), daemon=True).start()  # the server's log
+    proc.log = errors  # its lines so far, for tests
     try:
         address = _wait_for_address(proc, start_timeout, errors)
         yield address, proc

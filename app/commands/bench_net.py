@@ -11,7 +11,7 @@ HELP = "measure the device servers: state-read latency, streaming rate, depth fr
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--reads", type=int, default=2000, help="state reads timed")
-    p.add_argument("--frames", type=int, default=20, help="depth frames timed")
+    p.add_argument("--frames", type=int, default=50, help="depth frames timed")
     p.add_argument("--jobs", type=int, default=3, help="jobs run each way (in-process and over the network)")
     p.add_argument("--task", default="bowl", choices=["mug", "bowl", "bottle"], help="the jobs' task")
     p.add_argument("--method", default="nift", help="the jobs' method")

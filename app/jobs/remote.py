@@ -92,11 +92,12 @@ def _oracle(cell: NetCell) -> Callable[[np.ndarray], Prediction]:
 
 
 def run_remote_series(cell: NetCell, layout: CellLayout, t: Task, seeds: list[int], pose: str, T_base_cam: np.ndarray,
-                      config: JobConfig = JobConfig(),
-                      on_result: Callable[[JobResult], None] = lambda r: None) -> list[JobResult]:
-    """One job per seed on the networked cell; the planning scene is built from `layout`, which
-    must be the served cell's (the same --config on both sides)."""
-    scene = PlanningScene(layout)
+                      config: JobConfig = JobConfig(), on_result: Callable[[JobResult], None] = lambda r: None,
+                      scene: PlanningScene | None = None) -> list[JobResult]:
+    """One job per seed on the networked cell; the planning scene (`scene`, or one built here) is
+    of `layout`, which must be the served cell's (the same --config on both sides)."""
+    own = scene is None
+    scene = PlanningScene(layout) if own else scene
     results = []
     try:
         for seed in seeds:
@@ -110,5 +111,6 @@ def run_remote_series(cell: NetCell, layout: CellLayout, t: Task, seeds: list[in
             results.append(result)
             on_result(result)
     finally:
-        scene.close()
+        if own:
+            scene.close()
     return results

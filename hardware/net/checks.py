@@ -63,8 +63,8 @@ def trajectory(times: Any, q: Any, qd: Any, limits: JointLimits) -> tuple[np.nda
         raise ValueError("trajectory times and positions must be finite")
     if np.any(np.diff(t) <= 0):
         raise ValueError("trajectory times must increase")
-    outside = [i for i, qi in enumerate(Q) if not limits.contains(qi)]
-    if outside:
+    outside = np.flatnonzero(np.any((Q < limits.lower - 1e-9) | (Q > limits.upper + 1e-9), axis=1))  # (K,)
+    if len(outside):
         raise ValueError(f"trajectory leaves the joint limits at sample {outside[0]} of {len(Q)}")
     if qd is None:
         return t, Q, None

@@ -1,8 +1,8 @@
 """Clients of the device servers: `NetArm`, `NetGripper`, `NetCamera` implement the same interfaces
 as the simulated devices (`hardware.interfaces`), so a job cannot tell them apart.
 
-A blocking verb (moveJ, close, capture ...) is sent, then its job is polled every `poll` seconds
-until it ends; the polls are the watchdog's kicks, so a client that dies or loses the network
+A blocking verb (moveJ, close, capture ...) is sent, then its job is polled until it ends, each
+poll held by the server up to `poll` seconds and answered the moment the job ends; the polls are the watchdog's kicks, so a client that dies or loses the network
 stops the arm within the server's watchdog period. stopJ may be sent from another thread while a
 motion is being waited for. Errors come back as the exceptions the in-process devices raise:
 ProtectiveStopError, DeviceNotConnectedError, ValueError; a refused request raises
@@ -45,7 +45,7 @@ class NetDeviceConfig:
     token_file: Path = DEFAULT_TOKEN_FILE
     timeout: float = 5.0  # s for one reply
     discovery_timeout: float = 3.0
-    poll: float = 0.01  # s between polls of a running motion
+    poll: float = 0.02  # s each poll of a running motion waits on the server (each poll a watchdog kick)
     motion_timeout: float = 120.0  # s a blocking verb may take
 
 
@@ -81,19 +81,18 @@ class NetClient:
         name, message = reply.get("error", "DeviceError"), reply.get("message", "")
         raise ERRORS.get(name, DeviceRefusedError)(f"{self.device} {verb}: {message}")
 
-    def run(self, verb: str, *args: Any, poll: float = 0.01, timeout: float = 120.0) -> Any:
+    def run(self, verb: str, *args: Any, poll: float = 0.02, timeout: float = 120.0) -> Any:
         """A blocking verb: submit it, poll its job until it ends (each poll kicks the watchdog)."""
         job = self.call(verb, *args)["job"]
         end = time.monotonic() + timeout
         while True:
-            state = self.call("result", job)
+            state = self.call("result", job, poll)  # the server holds the poll up to `poll` s for the job
             if state["done"]:
                 self.note = state.get("note", "")
                 return state["value"]
             if time.monotonic() > end:
                 self.call_quietly("stopJ")
                 raise TimeoutError(f"{self.device} {verb} did not finish within {timeout:g} s")
-            time.sleep(poll)
 
     def call_quietly(self, verb: str, *args: Any) -> None:
         try:

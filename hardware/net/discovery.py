@@ -107,7 +107,8 @@ def find(kind: str, name: str | None = None, timeout: float = 3.0, interface: st
     found = browse((kind,), timeout, interface, until=lambda fs: any(match(f) for f in fs))
     hits = [f for f in found if match(f)]
     if not hits:
-        wanted = f"a {kind} named {name!r}" if name else f"a {kind}"
+        article = "an" if kind[0] in "aeiou" else "a"
+        wanted = f"{article} {kind} named {name!r}" if name else f"{article} {kind}"
         seen = ", ".join(f"{f.name} ({f.kind})" for f in found) or "nothing"
         raise DeviceNotFoundError(f"looked for {wanted} on the network for {timeout:g} s; found {seen} (is `nift serve` running?)")
     return hits[0]

@@ -9,7 +9,8 @@ its state, and stop it, but not command it. Motions run on one motion thread (th
 devices share one physics world), so the socket keeps answering while they run: state reads,
 "result" polls and stopJ. A watchdog (ur_rtde's setWatchdog/kickWatchdog) stops a running arm
 motion when its client has sent nothing for 1 / min_frequency seconds; any message is a kick, and
-a waiting client's "result" polls keep it fed.
+a waiting client's "result" polls keep it fed (each waits up to MAX_WAIT for its job, so the reply
+comes the moment the motion ends).
 """
 from __future__ import annotations
 
@@ -18,6 +19,7 @@ import itertools
 import logging
 import threading
 import time
+from concurrent import futures
 from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass, field
 from typing import Any
@@ -31,6 +33,8 @@ LOG = logging.getLogger("nift.net")
 LOOPBACK = ("127.0.0.1", "localhost", "::1")
 BUILTIN = ("hello", "result", "release", "setWatchdog", "kickWatchdog")
 KEPT_RESULTS = 256  # finished jobs remembered for their "result" poll
+MAX_WAIT = 0.02  # s a "result" poll may wait for its job: it answers the moment the job ends, and other
+# requests (stopJ, state reads) wait at most this long behind it
 
 
 @dataclass(frozen=True)
@@ -194,7 +198,7 @@ class DeviceServer:
             return {"kind": svc.kind, "protocol": wire.PROTOCOL, "properties": svc.properties,
                     "controlled_by_other": device in self._control and self._control[device].client != client}
         if verb == "result":
-            return self._result(client, args[0] if args else None)
+            return self._result(args[0] if args else None, args[1] if len(args) > 1 else 0.0)
         if verb == "release":
             if device in self._control and self._control[device].client == client:
                 del self._control[device]
@@ -234,10 +238,13 @@ class DeviceServer:
             del self._jobs[k]
         return job_id
 
-    def _result(self, client: str, job_id: Any) -> dict:
+    def _result(self, job_id: Any, wait: Any = 0.0) -> dict:
+        """A job's outcome, waiting for it up to `wait` s (at most MAX_WAIT: the socket is not answered meanwhile)."""
         job = self._jobs.get(job_id) if isinstance(job_id, int) else None
         if job is None:
             raise Refused("ValueError", f"no job {job_id!r} on this server")
+        if isinstance(wait, (int, float)) and not isinstance(wait, bool) and wait > 0:
+            futures.wait([job.future], timeout=min(float(wait), MAX_WAIT))
         if not job.future.done():
             return {"done": False}
         del self._jobs[job_id]

@@ -101,8 +101,20 @@ def frame_record(f: Frame) -> dict:
 
 
 def camera_verbs(camera: DepthCamera) -> dict[str, Verb]:
+    last: dict = {}
+
+    def capture(c: DepthCamera) -> dict:
+        last["frame"] = frame_record(c.capture())
+        return last["frame"]
+
+    def last_frame(c: DepthCamera) -> dict:
+        if "frame" not in last:
+            raise ValueError("no frame captured yet: call capture first")
+        return last["frame"]
+
     return {"intrinsics": Verb(lambda c, _: intrinsics_record(c.intrinsics)),
-            "capture": Verb(lambda c, _: frame_record(c.capture()), "work")}
+            "capture": Verb(lambda c, _: capture(c), "work"),
+            "last_frame": Verb(lambda c, _: last_frame(c))}  # the last capture again: what delivery alone costs
 
 
 def device_service(kind: str, device: Any, properties: dict[str, str] | None = None) -> Service:
