@@ -37,6 +37,19 @@ def writable_directory(path: str | Path, what: str) -> Path:
     return path
 
 
+def writable_file(path: str | Path, what: str) -> Path:
+    """`path` if a file could be written there (its folder is, or could be made, a writable
+    directory, and it is no directory itself); a one-line error naming it if not."""
+    path = Path(path)
+    if path.is_dir():
+        raise ValueError(f"{what} {path} is a directory; give a file")
+    blocking = next((p for p in path.parents if p.exists() and not p.is_dir()), None)
+    if blocking is not None:
+        raise ValueError(f"{what} {path}: {blocking} is a file, not a directory")
+    writable_directory(path.parent, what)
+    return path
+
+
 def write_json(path: str | Path, data: dict) -> Path:
     """Write JSON atomically (indented, keys in insertion order)."""
     with atomic_path(path) as tmp:

@@ -66,3 +66,28 @@ def test_a_bowl_demo_in_the_mug_folder_is_refused_before_any_template_is_built(t
     from app.tasks.task import task
     with pytest.raises(ValueError, match="is of task 'bowl', not 'mug'"):
         task_templates(task("mug"), out, rebuild=True)
+
+
+def test_a_session_killed_between_the_two_renames_loses_nothing(tmp_path):
+    """kill -9 inside `swap_in`, after the old folder was set aside and before the new one was put in
+    its place: loading says where the demos are, and the next session puts them back."""
+    import os
+
+    from app.tasks.library import task_demos
+    from app.tasks.staging import leftovers, recover
+
+    out = tmp_path / "mug"
+    _demos(out, ["demo-00", "demo-01"])
+    os.replace(out, tmp_path / ".mug.old-abc123")  # the first rename
+    (tmp_path / ".mug.staging-def456").mkdir()  # the staging folder, never renamed
+    with pytest.raises(FileNotFoundError, match=r"interrupted .*\.mug\.old-abc123"):
+        task_demos(out)
+    recover(out)
+    assert (out / "demo-00.npz").read_bytes() == b"demo-00" and leftovers(out) == ([], [])
+
+
+def test_a_file_where_the_task_folder_goes_is_refused_and_kept(tmp_path):
+    (tmp_path / "mug").write_text("my notes")
+    with pytest.raises(ValueError, match="is a file"):
+        teach_mode(tmp_path / "mug", replace=True, add=False)
+    assert (tmp_path / "mug").read_text() == "my notes"

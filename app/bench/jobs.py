@@ -8,6 +8,7 @@ from typing import Callable
 
 import numpy as np
 
+from app.bench.memory import growth_mb_per_job, resident_mb
 from app.io_utils import write_json
 from app.jobs.job import JobConfig, JobResult
 from app.motion.scene import PlanningScene
@@ -51,18 +52,26 @@ def run_jobs_benchmark(jobs: int = 20, method: str = "nift", pose: str = "uprigh
 
     figures: dict = {"method": method, "pose": pose, "jobs_per_task": jobs}
     every: list[dict] = []
+    rss: list[float] = []  # MiB after each job
+
+    def each(result: JobResult) -> None:
+        rss.append(resident_mb())
+        progress(result)
+
     with SimCell(cell_config) as cell:
         T_cam = np.array(cell.camera.config.T_base_cam) if calibration is None else ensure_calibration(cell, calibration)
         scene = PlanningScene(cell_config)
         try:
             for name in tasks:
                 specs = [JobSpec(task(name), seed + i, pose) for i in range(jobs)]
-                results = run_series(cell, scene, T_cam, specs, JobConfig(method=method, second_look=second_look),
-                                      progress)
+                results = run_series(cell, scene, T_cam, specs, JobConfig(method=method, second_look=second_look), each)
                 figures.update(summarise(name, results))
                 every += [r.record() for r in results]
         finally:
             scene.close()
     if records is not None:
         write_json(records, every)
+    figures.update({"resident_mb_after_first_job": round(rss[0], 1), "resident_mb_after_last_job": round(rss[-1], 1),
+                    "resident_mb_max": round(max(rss), 1),
+                    "resident_mb_growth_per_job_second_half": round(growth_mb_per_job(rss), 3)})
     return figures

@@ -84,7 +84,8 @@ def run(args: argparse.Namespace) -> int:
                          args.nif, center_grasp=args.center_grasp, align_grasp=args.align_grasp,
                          feasible=args.feasible,
                          place_contact_scale=args.place_contact_scale, place_demo_match=args.place_demo_match)
-    writable_directory(args.out, "--out")  # before the progress bar: the error is the only line
+    config.check()  # before the progress bar: the error is the only line
+    writable_directory(args.out, "--out")
     if args.nif is not None:  # the weights load before any work (and before the bar)
         for feature in ("nif", "ndf"):
             if (weights := field_override(feature, args.nif)) is not None:

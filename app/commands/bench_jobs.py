@@ -34,14 +34,18 @@ def run(args: argparse.Namespace) -> int:
 
     from app.bench.jobs import run_jobs_benchmark
     from app.console.options import cell_config
+    from app.io_utils import writable_file
     from app.tasks.task import task
 
     tasks = tuple(task(t.strip()).name for t in args.tasks.split(",") if t.strip())
     jobs = 2 if args.quick else args.jobs
     if jobs < 1:
         raise ValueError(f"--jobs must be at least 1, got {jobs}")
+    cell_cfg = cell_config(args)  # a bad --config fails before the progress bar
+    if args.records is not None:
+        writable_file(args.records, "--records")
     with tqdm(total=jobs * len(tasks), unit="job", desc="bench-jobs") as bar:
-        figures = run_jobs_benchmark(jobs, args.method, args.pose, args.seed, tasks, cell_config(args), args.calibration,
+        figures = run_jobs_benchmark(jobs, args.method, args.pose, args.seed, tasks, cell_cfg, args.calibration,
                                      lambda r: bar.update(1), args.records, args.second_look)
     print_figures(figures, args.json)
     return 0

@@ -24,9 +24,13 @@ def run(args: argparse.Namespace) -> int:
     from app.sim.cell import SimCell
     from calibration.store import save_calibration
 
+    from app.io_utils import writable_file
+
     if args.views < 3:
         raise ValueError(f"--views must be at least 3, got {args.views}")
-    with SimCell(cell_config(args)) as cell:
+    writable_file(args.out, "--out")
+    cell_cfg = cell_config(args)
+    with SimCell(cell_cfg) as cell:
         calibration = calibrate_sim_cell(cell, views=args.views, seed=args.seed)
     record = result_record(calibration)
     save_calibration(args.out, calibration.result.T_base_cam, record)

@@ -39,8 +39,12 @@ def run(args: argparse.Namespace) -> int:
     from app.sim.cell import SimCell
     from app.sim.spawn import SCALE_RANGE, spawn
 
+    from app.io_utils import writable_file
+
     if args.out.suffix.lower() != ".ply" or args.image.suffix.lower() != ".png":
-        raise ValueError("--out must end in .ply and --image in .png")
+        raise ValueError(f"--out {args.out} must end in .ply and --image {args.image} in .png")
+    writable_file(args.out, "--out")
+    writable_file(args.image, "--image")
     rng = np.random.default_rng(args.seed)
     seeds = split(args.category, "test")
     instance = int(seeds[args.seed % len(seeds)])

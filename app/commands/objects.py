@@ -34,9 +34,15 @@ def pick_seeds(category: str, split_name: str, count: int, seed: int) -> list[in
 
 
 def run(args: argparse.Namespace) -> int:
+    from app.io_utils import writable_directory, writable_file
     from app.objects import generate, semantics
     from app.objects.sheet import contact_sheet
 
+    if args.out.suffix.lower() != ".png":
+        raise ValueError(f"--out {args.out}: the contact sheet is a PNG; give a .png path")
+    writable_file(args.out, "--out")
+    if args.export:
+        writable_directory(args.export, "--export")
     seeds = pick_seeds(args.category, args.split, args.count, args.seed)
     meshes = [generate(args.category, s) for s in seeds]
     contact_sheet(meshes, [f"{args.category} {s}" for s in seeds], args.out)

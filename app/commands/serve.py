@@ -66,10 +66,11 @@ def run(args: argparse.Namespace) -> int:
 
     names = _devices(args.devices)
     check_bind(args.bind, args.token_file)
-    token_file = args.token_file or DEFAULT_TOKEN_FILE
-    token = ensure_token(token_file)
     config = cell_config(args)
     config = replace(config, world=replace(config.world, realtime=args.realtime))
+    ServerConfig(token="x" * 16, bind=args.bind, port=args.port, watchdog=args.watchdog)  # bad settings fail first
+    token_file = args.token_file or DEFAULT_TOKEN_FILE
+    token = ensure_token(token_file)  # written on the first start only
     logging.basicConfig(level=logging.INFO, format="%(asctime)s nift serve: %(message)s", stream=sys.stderr)
     server_config = ServerConfig(token=token, bind=args.bind, port=args.port, watchdog=args.watchdog)
     signal.signal(signal.SIGTERM, _interrupt)  # a terminated server stops its arm and unregisters, as Ctrl-C does

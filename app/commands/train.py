@@ -33,13 +33,32 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--json", action="store_true", help="print the model card as JSON")
 
 
+FLAG_RANGES = (("epochs", 1, 100_000), ("minutes", 1e-3, 1e6), ("lr", 1e-12, 1.0), ("lr_final", 0.0, 1.0),
+               ("batch_size", 1, 4096), ("scf_order", 0, 10), ("threads", 1, 1024))
+
+
+def check_flags(args: argparse.Namespace) -> None:
+    """Each numeric flag given is inside its range (a one-line error naming it), and --out and
+    --weights are places a run could be written, before any data is read."""
+    from app.io_utils import writable_directory, writable_file
+
+    for name, low, high in FLAG_RANGES:
+        value = getattr(args, name)
+        if value is not None and not low <= value <= high:
+            raise ValueError(f"--{name.replace('_', '-')} must be in [{low:g}, {high:g}], got {value}")
+    writable_directory(args.out, "--out")
+    if args.weights is not None:
+        writable_file(args.weights, "--weights")
+
+
 def config_from(args: argparse.Namespace):
     """The TrainConfig the arguments describe."""
     from app.nift.field import FieldConfig
     from app.training.train import TrainConfig
 
     field = FieldConfig(target=args.target, scf_order=args.scf_order)
-    values = dict(epochs=args.epochs or (1 if args.quick else 10), lr=args.lr, batch_size=args.batch_size,
+    epochs = args.epochs if args.epochs is not None else (1 if args.quick else 10)
+    values = dict(epochs=epochs, lr=args.lr, batch_size=args.batch_size,
                   minutes=args.minutes, lr_final=args.lr_final, seed=args.seed)
     if args.quick:
         field = FieldConfig(target=args.target, scf_order=args.scf_order, latent=8, encoder_width=8,
@@ -53,6 +72,7 @@ def run(args: argparse.Namespace) -> int:
 
     from app.training.train import train
 
+    check_flags(args)
     if args.threads:
         torch.set_num_threads(args.threads)
     command = "nift " + " ".join(shlex.quote(a) for a in sys.argv[1:])

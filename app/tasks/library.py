@@ -14,6 +14,7 @@ from app.nift.template import (StaleTemplate, Template, build_template, field_id
 from app.tasks.anchors import anchor_mesh
 from app.tasks.demo import DEMO_GLOB, Demo, load_demo
 from app.tasks.task import Task
+from app.tasks.staging import leftovers
 
 DEMOS_DIR = Path(__file__).resolve().parents[2] / "demos"
 STAGES = ("grasp", "place")
@@ -23,6 +24,10 @@ def task_demos(out: Path) -> list[Demo]:
     """Every demo in a task directory, in name order."""
     paths = sorted(out.glob(DEMO_GLOB))
     if not paths:
+        _, old = leftovers(out)
+        if old and not out.exists():
+            raise FileNotFoundError(f"no demos in {out}: an interrupted `nift teach` left them in {old[-1]}; "
+                                    f"the next `nift teach` puts them back (or rename it to {out.name})")
         raise FileNotFoundError(f"no demos in {out}: record some with `nift teach`")
     return [load_demo(p) for p in paths]
 

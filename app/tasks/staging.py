@@ -17,6 +17,7 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
+from app.io_utils import writable_directory
 from app.tasks.demo import DEMO_GLOB
 
 MODES = ("replace", "add")
@@ -32,6 +33,7 @@ def teach_mode(directory: Path, replace: bool, add: bool) -> str:
     one-line error for one that has some (nothing is deleted unasked)."""
     if replace and add:
         raise ValueError("give --replace or --add, not both")
+    writable_directory(directory, "--out")  # a file there is never swapped for a task folder
     if replace or add:
         return "replace" if replace else "add"
     if n := demo_count(directory):
@@ -48,6 +50,7 @@ def staged(out: Path, mode: str) -> Iterator[Path]:
         raise ValueError(f"unknown teach mode {mode!r}; choose {' or '.join(MODES)}")
     out = Path(out)
     out.parent.mkdir(parents=True, exist_ok=True)
+    recover(out)
     stage = Path(tempfile.mkdtemp(prefix=f".{out.name}.staging-", dir=out.parent))
     try:
         if mode == "add" and out.is_dir():
@@ -57,6 +60,26 @@ def staged(out: Path, mode: str) -> Iterator[Path]:
         swap_in(stage, out)
     finally:
         shutil.rmtree(stage, ignore_errors=True)
+
+
+def leftovers(out: Path) -> tuple[list[Path], list[Path]]:
+    """(staging folders, set-aside old folders) an interrupted session left beside `out`."""
+    out = Path(out)
+    return (sorted(out.parent.glob(f".{out.name}.staging-*")), sorted(out.parent.glob(f".{out.name}.old-*")))
+
+
+def recover(out: Path) -> None:
+    """Undo what a killed session left (a kill -9 runs no clean-up): its staging folders are removed;
+    a set-aside old folder is put back when `out` is missing (killed between the two renames of
+    `swap_in`), and removed when `out` is there (killed after them)."""
+    staging, old = leftovers(out)
+    for folder in staging:
+        shutil.rmtree(folder, ignore_errors=True)
+    if old and not Path(out).exists():
+        os.replace(old[-1], out)
+        old = old[:-1]
+    for folder in old:
+        shutil.rmtree(folder, ignore_errors=True)
 
 
 def swap_in(stage: Path, out: Path) -> None:

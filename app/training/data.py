@@ -62,8 +62,9 @@ class DataConfig:
             check_category(c)
         if self.camera not in CAMERAS:
             raise ValueError(f"unknown camera setting {self.camera!r}; choose one of {', '.join(CAMERAS)}")
-        if self.instances < 1 or self.views < 1 or self.queries < 1 or self.points < 1:
-            raise ValueError("instances, views, queries and points must all be >= 1")
+        for name in ("instances", "views", "queries", "points"):
+            if getattr(self, name) < 1:
+                raise ValueError(f"--{name} must be >= 1, got {getattr(self, name)}")
         if not 0.0 <= self.near_surface <= 1.0:
             raise ValueError(f"near_surface is a share in [0, 1], got {self.near_surface}")
         available = len(split(self.categories[0], self.split))

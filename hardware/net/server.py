@@ -51,9 +51,11 @@ class ServerConfig:
         if not isinstance(self.token, str) or len(self.token) < 16:
             raise ValueError("the device server needs a token of at least 16 characters")
         if not 0 <= self.port <= 65535:
-            raise ValueError(f"port must be in [0, 65535], got {self.port}")
-        if not (0.0 < self.watchdog <= 60.0 and 0.0 < self.lease <= 3600.0):
-            raise ValueError("watchdog must be in (0, 60] s and lease in (0, 3600] s")
+            raise ValueError(f"--port must be in [0, 65535], got {self.port}")
+        if not 0.0 < self.watchdog <= 60.0:
+            raise ValueError(f"--watchdog must be in (0, 60] s, got {self.watchdog}")
+        if not 0.0 < self.lease <= 3600.0:
+            raise ValueError(f"lease must be in (0, 3600] s, got {self.lease}")
 
 
 class Refused(Exception):

@@ -1,0 +1,59 @@
+"""A corpus of bad inputs across the verbs, each run as a subprocess the way a user runs `nift`:
+exit code 2, exactly one line on stderr that names the input, and the working directory left
+exactly as it was (no file written, none removed, no temp file, no empty folder)."""
+import os
+import subprocess
+import sys
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+
+import pytest
+
+from bad_inputs import CORPUS, make_inputs
+
+
+def snapshot(root: Path) -> dict[str, tuple[int, int]]:
+    return {str(p.relative_to(root)): (p.stat().st_size if p.is_file() else -1, p.stat().st_mtime_ns)
+            for p in sorted(root.rglob("*"))}
+
+
+def run_case(args: tuple[str, ...], cwd: Path, env: dict) -> subprocess.CompletedProcess:
+    script = Path(sys.executable).parent / "nift"
+    cmd = [str(script)] if script.exists() else [sys.executable, "-m", "app.cli"]
+    return subprocess.run([*cmd, *args], cwd=cwd, capture_output=True, text=True, timeout=300, env=env)
+
+
+def test_the_corpus_is_large_enough_and_covers_the_verbs():
+    assert len(CORPUS) >= 60
+    verbs = {args[0] for args, _ in CORPUS}
+    assert {"run", "imitate", "capture", "calibrate", "make-data", "train", "teach", "bench", "bench-jobs",
+            "objects", "serve"} <= verbs
+
+
+@pytest.mark.slow
+def test_every_bad_input_ends_in_one_line_naming_it_and_leaves_the_directory_as_it_was(tmp_path):
+    env = {**os.environ, "NIFT_LOG_DIR": str(tmp_path / "logs"), "HOME": str(tmp_path / "home")}
+    cases = []
+    for i, (args, named) in enumerate(CORPUS):
+        cwd = tmp_path / f"case-{i:02d}"
+        cwd.mkdir()
+        make_inputs(cwd)
+        cases.append((args, named, cwd, snapshot(cwd)))
+    with ThreadPoolExecutor(2) as pool:  # two at a time: this machine's cores
+        results = list(pool.map(lambda c: run_case(c[0], c[2], env), cases))
+    failures = []
+    for (args, named, cwd, before), r in zip(cases, results):
+        lines = r.stderr.strip().splitlines()
+        problems = []
+        if r.returncode != 2:
+            problems.append(f"exit {r.returncode}")
+        if len(lines) != 1:
+            problems.append(f"{len(lines)} stderr lines")
+        elif named not in lines[0]:
+            problems.append(f"does not name {named!r}")
+        if snapshot(cwd) != before:
+            problems.append(f"changed the directory: {sorted(set(snapshot(cwd)) ^ set(before))}")
+        if problems:
+            failures.append(f"nift {' '.join(args)}: {', '.join(problems)}: {r.stderr.strip()[:300]!r}")
+    assert not failures, "\n".join(failures)
+    assert not (tmp_path / "logs").exists()  # no bad input counted as an internal error
