@@ -3,12 +3,10 @@ Every later load works on a complete earlier state or says clearly what is wrong
 existed before is lost; the same command run again finishes the work."""
 import hashlib
 import json
-import os
 import shutil
 import signal
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import numpy as np

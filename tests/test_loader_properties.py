@@ -3,11 +3,9 @@ truncations of good files and random valid-but-wrong values end in a one-line Va
 OSError, or load a value that obeys every rule - never another exception, never a wrong value."""
 import json
 import math
-import shutil
 from pathlib import Path
 
 import numpy as np
-import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
