@@ -190,3 +190,13 @@ def test_the_open_grippers_lowest_point_is_its_fingertips_pointing_down_and_its_
     assert np.isclose(lowest_point(down), 0.01 - g.finger[2] / 3)  # the TCP sits 2/3 down the fingers
     sideways = make_pose(rotvec_to_matrix([np.pi / 2, 0.0, 0.0]), [0.5, 0.0, 0.08])  # closing axis vertical
     assert np.isclose(lowest_point(sideways), 0.08 - g.palm[1] / 2)  # the palm's long side
+
+
+def test_a_results_line_that_is_not_a_row_is_named(tmp_path):
+    from app.bench.runner import read_rows
+
+    (tmp_path / "results.jsonl").write_text('{"trial": "mug/upright/0", "method": "cpd"}\n[1, 2]\n')
+    with pytest.raises(ValueError, match="line 2 is not a result row"):
+        read_rows(tmp_path)
+    (tmp_path / "results.jsonl").write_text('{"trial": "mug/upright/0", "method": "cpd"}\n{"tri')  # torn last line
+    assert [r["method"] for r in read_rows(tmp_path)] == ["cpd"]

@@ -108,3 +108,17 @@ def test_templates_of_other_nif_weights_sit_beside_the_shipped_ones(tmp_path):
     save_template(dataclasses.replace(shipped, field_id="nif:000000000000"), template_path(demos, "grasp", "ibs", "nif"))
     assert task_templates(t, demos, "ibs", "nif")["grasp"].field_id == field_id("nif")
     assert load_template(template_path(demos, "grasp", "ibs", "nif")).field_id == field_id("nif")
+
+
+def test_a_template_header_without_its_anchor_is_named(tmp_path):
+    from app.io_utils import read_npz, write_npz
+    from app.nift.template import FORMAT, load_template
+
+    from pathlib import Path
+
+    shipped = Path(__file__).resolve().parents[1] / "demos/mug/grasp-ibs-nif.nit.npz"
+    header, arrays = read_npz(shipped, FORMAT, "NIT", ("points", "features", "distances"))
+    del header["anchor"]
+    write_npz(tmp_path / "t.nit.npz", arrays, header)
+    with pytest.raises(ValueError, match="lacks anchor"):
+        load_template(tmp_path / "t.nit.npz")

@@ -75,11 +75,15 @@ def read_rows(out: Path) -> list[dict]:
     if not path.exists():
         return []
     rows = []
-    for line in path.read_text().splitlines():
+    for number, line in enumerate(path.read_text().splitlines(), 1):
         try:
-            rows.append(json.loads(line))
+            row = json.loads(line)
         except json.JSONDecodeError:
             break  # an interrupted write: that trial runs again
+        if not isinstance(row, dict) or not isinstance(row.get("trial"), str) or not isinstance(row.get("method"), str):
+            raise ValueError(f"{path} line {number} is not a result row (a JSON object with a trial and a method); "
+                             f"remove it or give another --out")
+        rows.append(row)
     return rows
 
 

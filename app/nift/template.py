@@ -38,6 +38,7 @@ from hardware.se3 import invert, transform_points
 FORMAT = "nift-nit/2"
 OLDER_FORMATS = ("nift-nit/1",)  # readable headers, but no distances: rebuild from the demos
 QUERIES = ("ibs", "bps")
+HEADER_KEYS = ("anchor", "query", "feature", "field", "demos")  # what a template file's header must hold
 FEATURES = {"nif": "nif", "ndf": "ndf", "scf": "nif"}  # feature kind -> the field it comes from
 
 
@@ -196,6 +197,11 @@ def load_template(path: str | Path, weights: str | Path | None = None) -> Templa
         if any(f"found {old!r}" in str(exc) for old in OLDER_FORMATS):
             raise StaleTemplate(f"{exc}; rebuild it from its demos") from None
         raise
+    missing = [k for k in HEADER_KEYS if not isinstance(header.get(k), (str, list))]
+    if missing:
+        raise ValueError(f"{path}: the template header lacks {', '.join(missing)}; rebuild it from its demos")
+    if header["feature"] not in FEATURES or header["query"] not in QUERIES:
+        raise ValueError(f"{path}: unknown template kind {header['query']!r}-{header['feature']!r}")
     points, features, distances = arrays["points"], arrays["features"], arrays["distances"]
     if points.shape[0] != features.shape[0] or points.shape[1:] != (3,) or distances.shape != points.shape[:1]:
         raise ValueError(f"{path}: points {points.shape}, features {features.shape} and distances "
