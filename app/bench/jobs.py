@@ -10,6 +10,7 @@ import numpy as np
 
 from app.bench.memory import growth_mb_per_job, resident_mb
 from app.io_utils import write_json
+from app.jobs.choice import NO_DEMO_LIKE_GRASP
 from app.jobs.job import JobConfig, JobResult
 from app.motion.scene import PlanningScene
 from app.sim.cell import CellConfig, SimCell
@@ -22,12 +23,17 @@ def summarise(name: str, results: list[JobResult]) -> dict:
     planned = [r for r in results if r.plan]
     wall = [sum(r.seconds.values()) for r in results]
     failures = Counter(r.failed_stage for r in results if not r.success)
+    no_grasp = sum(r.failed_stage == "plan" and r.reason.startswith(NO_DEMO_LIKE_GRASP) for r in results)
+    possible = len(results) - no_grasp
     out = {
         f"{name}_success": f"{sum(r.success for r in results)}/{len(results)}",
         f"{name}_success_rate": round(float(np.mean([r.success for r in results])), 3),
         f"{name}_median_job_seconds": round(float(np.median(wall)), 2),
         f"{name}_median_imitate_seconds": round(float(np.median([r.seconds.get("imitate", 0.0) for r in results])), 2),
         f"{name}_mean_attempts": round(float(np.mean([max(1, len(r.attempts)) for r in results])), 2),
+        f"{name}_no_demo_like_grasp": no_grasp,  # jobs where no grasp like the demos' exists in the pose
+        f"{name}_success_where_a_demo_like_grasp_exists":
+            round(sum(r.success for r in results) / possible, 3) if possible else None,
     }
     if planned:
         out[f"{name}_median_planning_seconds"] = round(float(np.median([r.plan["planning_seconds"] for r in planned])), 3)

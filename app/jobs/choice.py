@@ -23,6 +23,15 @@ Failure = Callable[[np.ndarray, str], "str | None"]  # TCP pose (4, 4), what it 
 Widths = Callable[[np.ndarray], tuple[float, float]]  # grasp (4, 4) -> fingers' opening (m) holding, let go
 
 
+NO_DEMO_LIKE_GRASP = "no grasp like the demos'"  # how a job's reason starts when none exists (bench counts it apart)
+GRASP_HITS = "the gripper at the grasp hits "  # the quick test's outcome (app.motion.ik.reach_failure)
+
+
+def _grasp_in_table(outcome: str) -> bool:
+    """Whether a pair's outcome says its open gripper at the grasp is in the table (among other things)."""
+    return outcome.startswith(GRASP_HITS) and "table" in outcome[len(GRASP_HITS):].split(" (")[0].split(", ")
+
+
 class NoCandidate(NoIKSolution):
     """No candidate pair could be planned; `tried` says what happened to each."""
 
@@ -61,10 +70,12 @@ class _Cached:
         return self.seen[key]
 
 
-def choose(planner: Planner, candidates: list[Candidate], q_start: np.ndarray, place_direction: np.ndarray,
+def choose(planner: Planner, candidates: list[Candidate], q_start: np.ndarray,
+           place_direction: np.ndarray | Callable[[Candidate], np.ndarray],
            failure: Failure, most_plans: int = 6, widths: Widths | None = None) -> Choice:
     """Plan the first pair that passes the quick test at its grasp and its place and the full plan;
-    NoCandidate with the best pair's reason and the count of pairs tried when none does. `widths(T_grasp)`:
+    NoCandidate with the best pair's reason and the count of pairs tried when none does. `place_direction`:
+    the line onto the fixture, or a function of the pair giving it. `widths(T_grasp)`:
     the fingers' opening while holding and once let go, for the place's tests (fully open if not given)."""
     quick = _Cached(failure)
     stroke = planner.scene.geometry.stroke
@@ -81,7 +92,8 @@ def choose(planner: Planner, candidates: list[Candidate], q_start: np.ndarray, p
             continue
         plans += 1
         try:
-            plan = planner.pick_place(q_start, c.T_base_tcp, c.T_base_tcp_place, place_direction, (held, released))
+            direction = place_direction(c) if callable(place_direction) else place_direction
+            plan = planner.pick_place(q_start, c.T_base_tcp, c.T_base_tcp_place, direction, (held, released))
         except NoIKSolution as exc:
             tried.append(describe(c, str(exc)))
             if plans >= most_plans:
@@ -90,5 +102,8 @@ def choose(planner: Planner, candidates: list[Candidate], q_start: np.ndarray, p
         tried.append(describe(c, "planned"))
         return Choice(plan, c, tried)
     if not tried:
-        raise NoCandidate("no grasp like the demos' was found on this cloud (no candidate)", tried)
+        raise NoCandidate(f"{NO_DEMO_LIKE_GRASP} was found on this cloud (no candidate)", tried)
+    if all(_grasp_in_table(t["outcome"]) for t in tried):
+        raise NoCandidate(f"{NO_DEMO_LIKE_GRASP} exists in this pose: every candidate's gripper "
+                          f"({len(tried)}, both half-turns) would be in the table", tried)
     raise NoCandidate(f"none of {len(tried)} candidates could be planned; the best: {tried[0]['outcome']}", tried)

@@ -29,6 +29,7 @@ import numpy as np
 from app.jobs.check import placed
 from app.jobs.choice import NoCandidate, choose, describe
 from app.jobs.clearance import gripper_clear
+from app.motion.place_line import above_peg, peg_line_direction
 from app.jobs.second_look import SecondLookConfig, second_look
 from app.motion.executor import (OBJECT, ExecutionError, ExecutorConfig,
                                  Planner, execute, reverse)
@@ -274,11 +275,13 @@ def _plan(job: _Job, planner: Planner, options: list, cloud: np.ndarray):
         held = held_width(T_grasp, cloud)
         return held, held + job.config.release_clearance
 
+    T_above = above_peg(job.T_base_fixture, job.t.fixture, job.config.executor.peg_clearance)
+    options = [replace(c, T_base_fixture=T_above) for c in options]  # placed clear of the peg (place_line)
     with job.stage("plan"):
         q = job.arm.getActualQ()
         failure = reach_failure(job.kin, job.scene, q, ignore=(OBJECT,))
         try:
-            choice = choose(planner, options, q, job.t.place_direction(job.T_base_fixture), failure,
+            choice = choose(planner, options, q, place_line(job, cloud), failure,
                             job.config.most_plans, widths)
         except NoCandidate as exc:
             job.result.candidates += exc.tried
@@ -289,6 +292,15 @@ def _plan(job: _Job, planner: Planner, options: list, cloud: np.ndarray):
         job.result.plan = {"planning_seconds": round(plan.seconds, 3), "trajectory_seconds": round(plan.duration, 2),
                            "joint_travel_rad": round(plan.travel, 2), "candidates_tried": len(choice.tried)}
     return plan, choice.candidate
+
+
+def place_line(job: _Job, cloud: np.ndarray):
+    """Pair -> the direction of its line onto the fixture: one on which the object's seen points,
+    carried there, clear the fixture (a handle threads the peg; `app.motion.place_line`)."""
+    def direction(c: Candidate) -> np.ndarray:
+        return peg_line_direction(transform_points(c.motion, cloud), job.T_base_fixture, job.t.fixture,
+                                  job.config.executor.place_distance)
+    return direction
 
 
 def _pick(job: _Job, plan) -> None:

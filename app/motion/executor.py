@@ -43,6 +43,7 @@ class ExecutorConfig:
     approach_distance: float = 0.10  # m, pre-grasp back along the tool's approach (z) axis
     lift_height: float = 0.12  # m, straight up after the grasp
     place_distance: float = 0.10  # m, pre-place back along the fixture's approach direction
+    peg_clearance: float = 0.006  # m the object is placed above its hang on a peg, and dropped (app.motion.place_line)
     retreat_distance: float = 0.10  # m, back along the tool axis after release
     joint_speed: float = 1.05  # rad/s on transits (ur_rtde's moveJ default)
     joint_acceleration: float = 1.4  # rad/s^2
