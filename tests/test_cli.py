@@ -92,7 +92,7 @@ def test_sim_and_capture_write_what_they_say(tmp_path):
     assert np.linalg.norm(points.mean(axis=0)[:2] - np.array(report["object_position"][:2])) < 0.08
     assert image.read_bytes()[:8] == PNG_MAGIC
     bad = nift("capture", "--out", str(tmp_path / "cloud.txt"), "--calibration", str(tmp_path / "calibration.json"))
-    assert bad.returncode == 2 and "--out must end in .ply" in bad.stderr
+    assert bad.returncode == 2 and "cloud.txt must end in .ply" in bad.stderr
 
 
 def test_bench_cell_quick_reports_figures():
