@@ -281,3 +281,30 @@ def test_approach_clear_passes_fingers_beside_a_wall_and_refuses_one_coming_down
     assert not approach_clear(onto, wall, 0.10, g)
     above = make_pose(down, [0.5, g.stroke / 2 + g.finger[1] / 2, 0.20])  # the fingertips stop above the wall
     assert approach_clear(above, wall, 0.10, g)
+
+
+def test_the_planning_scene_does_not_grow_with_each_jobs_cloud():
+    """PyBullet keeps every vertex list and mesh shape it is given; the scene hands it hull vertices
+    and one carried shape per cloud, so 40 jobs' clouds (added, carried three times, removed) cost
+    little (a 2,048-point list was 0.6 MB a call, 40 x 4 calls about 100 MB)."""
+    from app.bench.memory import resident_mb
+
+    scene = PlanningScene(CellConfig())
+    rng = np.random.default_rng(0)
+    try:
+        def job() -> None:
+            cloud = rng.normal(size=(1024, 3)) * 0.03 + [0.5, 0.0, 0.06]
+            scene.add_cloud("object", cloud, eye=np.array([1.25, 0.0, 0.55]))
+            for _ in range(3):
+                with scene.holding("object", make_pose(t=[0.5, 0.0, 0.1])):
+                    scene.collisions(np.array(CellConfig().arm.home_q))
+            scene.remove("object")
+
+        for _ in range(5):
+            job()
+        before = resident_mb()
+        for _ in range(40):
+            job()
+        assert resident_mb() - before < 15.0
+    finally:
+        scene.close()

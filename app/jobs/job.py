@@ -276,7 +276,8 @@ def _plan(job: _Job, planner: Planner, options: list, cloud: np.ndarray):
         return held, held + job.config.release_clearance
 
     T_above = above_peg(job.T_base_fixture, job.t.fixture, job.config.executor.peg_clearance)
-    options = [replace(c, T_base_fixture=T_above) for c in options]  # placed clear of the peg (place_line)
+    if T_above is not job.T_base_fixture:  # a peg: placed clear of it; other fixtures' pairs stay bit for bit
+        options = [replace(c, T_base_fixture=T_above) for c in options]
     with job.stage("plan"):
         q = job.arm.getActualQ()
         failure = reach_failure(job.kin, job.scene, q, ignore=(OBJECT,))

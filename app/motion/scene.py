@@ -25,6 +25,7 @@ import itertools
 from contextlib import contextmanager
 
 import numpy as np
+from scipy.spatial import ConvexHull, QhullError
 
 from app.layout import CellLayout, add_fixtures
 from hardware.bullet import add_table, joint_and_link_indices, load_cell_robot, p, set_pose
@@ -41,11 +42,22 @@ ON_TABLE = ("base_link", "shoulder_link")  # bolted to the table: never checked 
 CLOSE_BY_DESIGN = {("base_link", "upper_arm_link")}
 
 
+def hull_vertices(points: np.ndarray) -> np.ndarray:
+    """The vertices of the points' convex hull (all of them for a flat set): PyBullet makes the same
+    convex shape from them, and keeps every vertex list it is given (a 2,048-point cloud was 0.6 MB
+    a call, never freed; `nift bench-jobs` memory figures, docs/limits.md)."""
+    try:
+        return points[ConvexHull(points).vertices]
+    except (QhullError, ValueError):
+        return points
+
+
 class PlanningScene:
     """Collision queries for joint configurations of the cell's UR5."""
 
     def __init__(self, layout: CellLayout = CellLayout(), margin: float = 0.005,
                  geometry: GripperGeometry = GripperGeometry()) -> None:
+        self._args = (layout, margin, geometry)
         self.margin = margin  # metres of clearance that count as a collision
         self.geometry = geometry
         self.finger_width = geometry.stroke  # m between the fingers' inner faces (`fingers`)
@@ -60,6 +72,7 @@ class PlanningScene:
         self.links = {name: links[name] for name in ("base_link", *ARM_LINKS, *GRIPPER_LINKS)}
         self.self_pairs = self._self_pairs()
         self.solids: dict[str, np.ndarray] = {}  # cloud obstacles' points (with their shadow, no footprint)
+        self._held_shapes: dict[str, int] = {}  # the collision shape of each cloud obstacle when carried
         self.held: tuple[int, np.ndarray] | None = None  # (body, T_tcp_body) while holding
         self.ghost = self._load_ghost_gripper()
 
@@ -68,6 +81,12 @@ class PlanningScene:
         if self.client is not None:
             p.disconnect(self.client)
             self.client = None
+
+    def rebuild(self) -> None:
+        """The same scene in a fresh client, without run-time obstacles: PyBullet never frees a mesh
+        shape (0.7 MB a job's object hull), only a whole client (a series of jobs rebuilds now and then)."""
+        self.close()
+        self.__init__(*self._args)
 
     def set_q(self, q: np.ndarray) -> None:
         """Put the model arm at q, the fingers `finger_width` apart (fully open unless `fingers` says)."""
@@ -106,14 +125,16 @@ class PlanningScene:
         solid = np.concatenate(parts)
         self.solids[name] = solid
         footprint = solid * [1.0, 1.0, 0.0]
-        shape = p.createCollisionShape(p.GEOM_MESH, vertices=np.concatenate([solid, footprint]).tolist(),
+        shape = p.createCollisionShape(p.GEOM_MESH, vertices=hull_vertices(np.concatenate([solid, footprint])).tolist(),
                                        physicsClientId=self.client)
         self.obstacles[name] = p.createMultiBody(0.0, shape, physicsClientId=self.client)
+        self._held_shapes.pop(name, None)
 
     def remove(self, name: str) -> None:
         """Drop a run-time obstacle (no-op if absent)."""
         body = self.obstacles.pop(name, None)
         self.solids.pop(name, None)
+        self._held_shapes.pop(name, None)
         if body is not None:
             p.removeBody(body, physicsClientId=self.client)
 
@@ -145,8 +166,10 @@ class PlanningScene:
         if name not in self.solids:
             yield self
             return
-        shape = p.createCollisionShape(p.GEOM_MESH, vertices=self.solids[name].tolist(), physicsClientId=self.client)
-        body = p.createMultiBody(0.0, shape, physicsClientId=self.client)
+        if name not in self._held_shapes:  # one shape per cloud, however often it is carried in planning
+            self._held_shapes[name] = p.createCollisionShape(p.GEOM_MESH, vertices=hull_vertices(self.solids[name]).tolist(),
+                                                             physicsClientId=self.client)
+        body = p.createMultiBody(0.0, self._held_shapes[name], physicsClientId=self.client)
         self.held = (body, np.linalg.inv(T_base_tcp))  # the body's frame is the base frame at the grasp
         try:
             yield self

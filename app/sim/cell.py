@@ -68,6 +68,13 @@ class SimCell:
         self.fixtures.clear()
         self.robot.body = None
 
+    def refresh(self) -> None:
+        """The same cell in a fresh physics client (devices reconnected, the arm home): PyBullet never
+        frees a mesh shape, even when its body is removed (1.8 MB a spawned object), only a whole
+        client; a long series of jobs refreshes now and then (`app.sim.jobs.run_series`)."""
+        self.disconnect()
+        self.connect()
+
     def __enter__(self):
         self.connect()
         return self

@@ -117,12 +117,20 @@ def run_sim_job(cell: SimCell, scene: PlanningScene, T_base_cam: np.ndarray, spe
     return result
 
 
+REFRESH_EVERY = 20  # jobs between fresh physics clients in a series (memory: docs/limits.md, "Soak")
+
+
 def run_series(cell: SimCell, scene: PlanningScene, T_base_cam: np.ndarray, specs: list[JobSpec],
                config: JobConfig = JobConfig(), on_result: Callable[[JobResult], None] = lambda r: None,
-               record: Path | None = None) -> list[JobResult]:
-    """Run jobs one after the other; `record` (a .png) gets one strip per job, numbered if several."""
+               record: Path | None = None, refresh_every: int = REFRESH_EVERY) -> list[JobResult]:
+    """Run jobs one after the other; `record` (a .png) gets one strip per job, numbered if several;
+    every `refresh_every` jobs the cell and the planning scene start from fresh PyBullet clients,
+    which is what frees the shapes of the objects spawned so far."""
     results = []
     for i, spec in enumerate(specs):
+        if i and refresh_every and i % refresh_every == 0:
+            cell.refresh()
+            scene.rebuild()
         path = record if record is None or len(specs) == 1 else record.with_name(f"{record.stem}-{i:02d}{record.suffix}")
         results.append(run_sim_job(cell, scene, T_base_cam, spec, config, path))
         on_result(results[-1])
