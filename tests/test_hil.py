@@ -196,9 +196,8 @@ def test_the_whole_job_over_the_network_matches_the_in_process_cell(tmp_path):
     from app.sim.cell import CellConfig, SimCell
     from app.sim.jobs import JobSpec, run_sim_job
     from app.tasks.task import task
-    from calibration.store import load_calibration
-
-    T_base_cam = load_calibration("calibration.json")[0]
+    with SimCell(CellConfig()) as cell:  # the camera's true pose (calibration is tested on its own)
+        T_base_cam = np.array(cell.camera.config.T_base_cam)
     with served_cell(tmp_path / "token", "--no-advertise") as (address, proc):
         device = NetDeviceConfig(address=address, token=read_token(tmp_path / "token"))
         with NetCell(NetCellConfig(device, device, device, device)) as cell:

@@ -61,13 +61,18 @@ def test_teach_killed_at_random_moments_loses_no_demo(tmp_path):
     from app.tasks.staging import leftovers, recover
     from app.tasks.task import task
 
+    from app.sim.cell import CellConfig, SimCell
+    from calibration.store import save_calibration
+
+    with SimCell(CellConfig()) as cell:  # the camera's true pose: calibration is tested on its own
+        calibration = save_calibration(tmp_path / "calibration.json", np.array(cell.camera.config.T_base_cam), {})
     out = tmp_path / "mug"
     shutil.copytree(ROOT / "demos" / "mug", out)
     before = digest(out)
     rng = np.random.default_rng(1)
     for _ in range(3):
         killed = kill_after(nift_process("teach", "--task", "mug", "--out", str(out), "--replace", "--calibration",
-                                         str(ROOT / "calibration.json"), cwd=tmp_path), float(rng.uniform(1.0, 12.0)))
+                                         str(calibration), cwd=tmp_path), float(rng.uniform(1.0, 12.0)))
         assert killed  # a whole session takes minutes
         assert digest(out) == before  # the demos that were there are all there, unchanged
         assert len(task_demos(out)) == 10 and set(task_templates(task("mug"), out)) == {"grasp", "place"}

@@ -100,6 +100,21 @@ def _ply_text(points: np.ndarray) -> bytes:
             f"property float z\nend_header\n{body}\n").encode()
 
 
+def _calibration_bytes() -> bytes:
+    """A calibration file as `nift calibrate` writes it (a true camera pose, a few figures)."""
+    import tempfile
+
+    from calibration.store import save_calibration
+    from hardware.se3 import make_pose, rotvec_to_matrix
+
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "calibration.json"
+        save_calibration(path, make_pose(rotvec_to_matrix([2.0, -0.3, 0.4]), [1.25, 0.0, 0.55]),
+                         {"views": 20, "reprojection_rms_px": 0.21, "hand_eye_residual_mm": 0.8})
+        return path.read_bytes()
+
+
+CALIBRATION = _calibration_bytes()
 GOOD_PLY = _ply_text(np.random.default_rng(0).normal(size=(200, 3)) * 0.03 + [0.5, 0.0, 0.05])
 
 
@@ -142,7 +157,9 @@ def test_templates_truncated_or_corrupted(tmp_path, data):
 
 
 @FAST
-@given(data=st.one_of(_truncations(ROOT / "calibration.json"), _corrupted(ROOT / "calibration.json")))
+@given(data=st.one_of(st.integers(0, len(CALIBRATION) - 1).map(lambda n: CALIBRATION[:n]),
+                      st.lists(st.tuples(st.integers(0, len(CALIBRATION) - 1), st.integers(0, 255)), min_size=1,
+                               max_size=8).map(lambda edits: bytes(_apply(bytearray(CALIBRATION), edits)))))
 def test_calibration_files_truncated_or_corrupted(tmp_path, data):
     path = _write(tmp_path, "calibration.json", data)
     try:

@@ -77,12 +77,15 @@ def _in_process_captures(frames: int) -> list[float]:
 
 
 def run_net_benchmark(reads: int, frames: int, jobs: int, task_name: str = "bowl", method: str = "nift",
-                      seed: int = 0) -> dict:
-    """The figures (see the module docstring)."""
-    from calibration.store import load_calibration
+                      seed: int = 0, calibration: Path = Path("calibration.json")) -> dict:
+    """The figures (see the module docstring); the camera pose from the `calibration` file, the
+    in-process cell calibrated first (and the file written) if it is missing."""
+    from app.sim.calibration import ensure_calibration
+    from app.sim.cell import CellConfig, SimCell
 
     t = task(task_name)
-    T_base_cam = load_calibration(Path("calibration.json"))[0]
+    with SimCell(CellConfig()) as cell:
+        T_base_cam = ensure_calibration(cell, calibration)
     figures: dict = {}
     with tempfile.TemporaryDirectory() as tmp:
         token_file = Path(tmp) / "token"

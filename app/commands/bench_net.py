@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 
 from app.console.output import print_figures
 
@@ -16,6 +17,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--task", default="bowl", choices=["mug", "bowl", "bottle"], help="the jobs' task")
     p.add_argument("--method", default="nift", help="the jobs' method")
     p.add_argument("--seed", type=int, default=0, help="first job's seed")
+    p.add_argument("--calibration", type=Path, default=Path("calibration.json"),
+                   help="camera calibration file; if missing, the cell is calibrated first and it is written")
     p.add_argument("--quick", action="store_true", help="CI size: 200 reads, 5 frames, 1 job")
     p.add_argument("--json", action="store_true", help="print the figures as JSON")
 
@@ -30,5 +33,6 @@ def run(args: argparse.Namespace) -> int:
             raise ValueError(f"--{name} must be at least 1")
     if args.jobs < 0:
         raise ValueError("--jobs must be at least 0")
-    print_figures(run_net_benchmark(args.reads, args.frames, args.jobs, args.task, args.method, args.seed), args.json)
+    print_figures(run_net_benchmark(args.reads, args.frames, args.jobs, args.task, args.method, args.seed,
+                                    args.calibration), args.json)
     return 0
