@@ -2,8 +2,8 @@
 from __future__ import annotations
 
 import argparse
-import json
 import ipaddress
+import json
 import logging
 import signal
 import sys
@@ -60,7 +60,7 @@ def run(args: argparse.Namespace) -> int:
     from app.sim.cell import SimCell
     from app.sim.rig import SimRig, rig_service
     from hardware.net.discovery import Advertiser
-    from hardware.net.server import DeviceServer, ServerConfig
+    from hardware.net.server import DeviceServer, ServerConfig, check_settings
     from hardware.net.token import DEFAULT_TOKEN_FILE, ensure_token
     from hardware.net.verbs import device_service
 
@@ -68,7 +68,7 @@ def run(args: argparse.Namespace) -> int:
     check_bind(args.bind, args.token_file)
     config = cell_config(args)
     config = replace(config, world=replace(config.world, realtime=args.realtime))
-    ServerConfig(token="x" * 16, bind=args.bind, port=args.port, watchdog=args.watchdog)  # bad settings fail first
+    check_settings(args.port, args.watchdog)  # before the token file is written
     token_file = args.token_file or DEFAULT_TOKEN_FILE
     token = ensure_token(token_file)  # written on the first start only
     logging.basicConfig(level=logging.INFO, format="%(asctime)s nift serve: %(message)s", stream=sys.stderr)

@@ -29,11 +29,11 @@ import numpy as np
 from app.jobs.check import placed
 from app.jobs.choice import NoCandidate, choose, describe
 from app.jobs.clearance import gripper_clear
-from app.motion.place_line import above_peg, peg_line_direction
 from app.jobs.second_look import SecondLookConfig, second_look
 from app.motion.executor import (OBJECT, ExecutionError, ExecutorConfig,
                                  Planner, execute, reverse)
 from app.motion.ik import NoIKSolution, reach_failure
+from app.motion.place_line import above_peg, peg_line_direction
 from app.motion.scene import PlanningScene
 from app.nift.candidates import CandidateConfig
 from app.nift.imitate import ImitationConfig, use_threads
@@ -282,7 +282,7 @@ def _plan(job: _Job, planner: Planner, options: list, cloud: np.ndarray):
         q = job.arm.getActualQ()
         failure = reach_failure(job.kin, job.scene, q, ignore=(OBJECT,))
         try:
-            choice = choose(planner, options, q, place_line(job, cloud), failure,
+            choice = choose(planner, options, q, _place_line(job, cloud), failure,
                             job.config.most_plans, widths)
         except NoCandidate as exc:
             job.result.candidates += exc.tried
@@ -295,7 +295,7 @@ def _plan(job: _Job, planner: Planner, options: list, cloud: np.ndarray):
     return plan, choice.candidate
 
 
-def place_line(job: _Job, cloud: np.ndarray):
+def _place_line(job: _Job, cloud: np.ndarray):
     """Pair -> the direction of its line onto the fixture: one on which the object's seen points,
     carried there, clear the fixture (a handle threads the peg; `app.motion.place_line`)."""
     def direction(c: Candidate) -> np.ndarray:

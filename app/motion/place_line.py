@@ -2,10 +2,12 @@
 
 A mug hangs by its handle on the rack's peg, which rises at 45 degrees; the place line comes onto
 the hang from `place_distance` out along the peg. The planning scene cannot check the carried
-object on that line - the hull of its cloud fills the handle, so it always overlaps the peg - and
-on the oracle's mugs the handle caught the peg's tip and turned the mug 24-26 degrees in the grasp
-(seeds 5 and 9 of 10; the fingers were pushed 7 mm apart). Here the peg is what must pass through
-the handle: the object's points at the place, moved back along a direction d by s in (0, L],
+object on that line - the hull of its cloud fills the handle, so it always overlaps the peg. The
+oracle's hangs have the handle resting in the peg (4-7 of the mesh's vertices inside it); slid
+along the peg so, the handle dragged on it and turned the mug 24-26 degrees in the grasp (seeds 5
+and 9 of 10; the fingers were pushed 7 mm apart). So the object is placed `clearance` above its
+hang (`above_peg`), and the peg is what must pass through the handle: the object's points at the
+place, moved back along a direction d by s in (0, L],
 
     x(s) = x + s d,    hit  <=>  signed distance of x(s) to the fixture's mesh < margin,
 

@@ -50,12 +50,17 @@ class ServerConfig:
     def __post_init__(self) -> None:
         if not isinstance(self.token, str) or len(self.token) < 16:
             raise ValueError("the device server needs a token of at least 16 characters")
-        if not 0 <= self.port <= 65535:
-            raise ValueError(f"--port must be in [0, 65535], got {self.port}")
-        if not 0.0 < self.watchdog <= 60.0:
-            raise ValueError(f"--watchdog must be in (0, 60] s, got {self.watchdog}")
-        if not 0.0 < self.lease <= 3600.0:
-            raise ValueError(f"lease must be in (0, 3600] s, got {self.lease}")
+        check_settings(self.port, self.watchdog, self.lease)
+
+
+def check_settings(port: int, watchdog: float, lease: float = 10.0) -> None:
+    """A one-line error for a port, watchdog or lease out of range (before any token is written)."""
+    if not 0 <= port <= 65535:
+        raise ValueError(f"--port must be in [0, 65535], got {port}")
+    if not 0.0 < watchdog <= 60.0:
+        raise ValueError(f"--watchdog must be in (0, 60] s, got {watchdog}")
+    if not 0.0 < lease <= 3600.0:
+        raise ValueError(f"lease must be in (0, 3600] s, got {lease}")
 
 
 class Refused(Exception):
