@@ -9,6 +9,8 @@ from pathlib import Path
 import numpy as np
 import open3d as o3d
 
+from app.io_utils import NPY_ERRORS
+
 SUFFIXES = (".ply", ".pcd", ".xyz", ".npy")
 # A cloud a task can use: enough distinct points for the imitation, an object's metric size (the
 # test split's mugs, bowls and bottles span 6-35 cm; a cup-sized margin each way), within the UR5's
@@ -56,7 +58,7 @@ def load_cloud(path: str | Path) -> np.ndarray:
     if suffix == ".npy":
         try:
             cloud = np.load(path, allow_pickle=False)
-        except ValueError as exc:
+        except NPY_ERRORS as exc:
             raise ValueError(f"{path} is not a readable .npy array ({exc})") from None
     else:
         with c_output() as said:

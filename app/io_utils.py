@@ -4,6 +4,8 @@ from __future__ import annotations
 import json
 import os
 import tempfile
+import tokenize
+import zipfile
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Iterator
@@ -69,11 +71,14 @@ def write_npz(path: str | Path, arrays: dict, header: dict | None = None) -> Pat
     return Path(path)
 
 
+# What np.load raises for a corrupt, truncated or foreign .npy / .npz: its header is parsed as a Python
+# literal, so a damaged byte there surfaces as SyntaxError or tokenize.TokenError, not ValueError.
+NPY_ERRORS = (zipfile.BadZipFile, ValueError, KeyError, OSError, EOFError, SyntaxError, tokenize.TokenError)
+
+
 def read_npz(path: str | Path, fmt: str, kind: str, names: tuple[str, ...]) -> tuple[dict, dict]:
     """(header, arrays) of an existing file written by write_npz; a corrupt, foreign or wrong-format
     file gets a one-line error naming `kind` (e.g. "demo") and the file."""
-    import zipfile
-
     import numpy as np
 
     try:
@@ -83,7 +88,7 @@ def read_npz(path: str | Path, fmt: str, kind: str, names: tuple[str, ...]) -> t
             if found != fmt:  # before the arrays: another version may name other ones
                 raise _WrongFormat(f"{path}: expected format {fmt!r}, found {found!r}")
             arrays = {name: z[name] for name in names}
-    except (zipfile.BadZipFile, ValueError, KeyError, OSError, EOFError) as exc:
+    except NPY_ERRORS as exc:
         if isinstance(exc, _WrongFormat):
             raise ValueError(str(exc)) from None
         raise ValueError(f"{path} is not a readable {kind} file ({type(exc).__name__})") from None

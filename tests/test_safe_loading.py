@@ -77,3 +77,17 @@ def test_weights_with_an_empty_state_are_refused_in_one_line(tmp_path):
     torch.save({"format": FORMAT, "config": {}, "state": {"w": torch.zeros(1)}}, tmp_path / "wrong.pt")
     with pytest.raises(ValueError, match="do not fit their config"):
         load_field(tmp_path / "wrong.pt")
+
+
+def test_a_demo_with_a_damaged_npy_header_is_refused_in_one_line(tmp_path):
+    """A zeroed byte in an .npz member's header makes np.load raise tokenize.TokenError (the header is
+    parsed as a Python literal), found by the property tests: it is a corrupt file like any other."""
+    from pathlib import Path
+
+    from app.tasks.demo import load_demo
+
+    data = bytearray((Path(__file__).resolve().parents[1] / "demos/mug/demo-00.npz").read_bytes())
+    data[127] = 0
+    (tmp_path / "demo-00.npz").write_bytes(bytes(data))
+    with pytest.raises(ValueError, match="not a readable demo file"):
+        load_demo(tmp_path / "demo-00.npz")

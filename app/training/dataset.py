@@ -6,12 +6,12 @@ labelled query points, moved into the sample's pose, x = R (s q).
 """
 from __future__ import annotations
 
-import zipfile
 from pathlib import Path
 
 import numpy as np
 import torch
 
+from app.io_utils import NPY_ERRORS
 from app.training.manifest import read_manifest, shard_path
 
 ARRAYS = ("category", "seed", "queries", "scf", "occ", "sample_instance", "rotation", "scale", "cloud")
@@ -40,7 +40,7 @@ class FieldData:
                     for k in ARRAYS:
                         parts[k].append(z[k] + offset if k == "sample_instance" else z[k])
                     offset += len(z["seed"])
-            except (KeyError, ValueError, OSError, EOFError, zipfile.BadZipFile) as exc:  # truncated, foreign, pickled
+            except NPY_ERRORS as exc:  # truncated, foreign, pickled
                 raise ValueError(f"{file} is not a readable shard ({type(exc).__name__}: {exc})") from None
         for k, v in parts.items():
             setattr(self, k, np.concatenate(v))
