@@ -35,16 +35,17 @@ class Found:
     properties: dict[str, str]
 
 
-def _interfaces(address: str) -> list[str]:
-    return ["127.0.0.1"] if address in ("127.0.0.1", "localhost", "0.0.0.0") else [address]
+def _host(address: str) -> str:
+    """The IPv4 address to announce on and advertise for a bind address (loopback for the names of it)."""
+    return "127.0.0.1" if address in ("localhost", "0.0.0.0") else address
 
 
 class Advertiser:
     """Announces devices until closed."""
 
     def __init__(self, address: str = "127.0.0.1") -> None:
-        self.address = "127.0.0.1" if address in ("localhost", "0.0.0.0") else address
-        self._zc = Zeroconf(interfaces=_interfaces(address), ip_version=IPVersion.V4Only)
+        self.address = _host(address)
+        self._zc = Zeroconf(interfaces=[self.address], ip_version=IPVersion.V4Only)
         self._infos: list[ServiceInfo] = []
 
     def advertise(self, name: str, kind: str, port: int, properties: dict[str, str]) -> None:
@@ -77,7 +78,7 @@ class _Collect(ServiceListener):
 def browse(kinds: tuple[str, ...] = KINDS, timeout: float = 2.0, interface: str = "127.0.0.1",
            until=None) -> list[Found]:
     """The devices of these kinds advertised within `timeout` s (`until(found)`: stop early once true)."""
-    zc = Zeroconf(interfaces=_interfaces(interface), ip_version=IPVersion.V4Only)
+    zc = Zeroconf(interfaces=[_host(interface)], ip_version=IPVersion.V4Only)
     listener = _Collect()
     browsers = [ServiceBrowser(zc, service_type(k), listener) for k in kinds]
     found: dict[str, Found] = {}

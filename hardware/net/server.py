@@ -30,7 +30,6 @@ from hardware.net import wire
 from hardware.net.verbs import Service
 
 LOG = logging.getLogger("nift.net")
-LOOPBACK = ("127.0.0.1", "localhost", "::1")
 BUILTIN = ("hello", "result", "release", "setWatchdog", "kickWatchdog")
 KEPT_RESULTS = 256  # finished jobs remembered for their "result" poll
 MAX_WAIT = 0.02  # s a "result" poll may wait for its job: it answers the moment the job ends, and other

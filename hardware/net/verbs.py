@@ -30,6 +30,10 @@ class Verb:
     kind: str = "read"
     most_args: int = 0
 
+    def __post_init__(self) -> None:
+        if self.kind not in KINDS:
+            raise ValueError(f"unknown verb kind {self.kind!r}; choose one of {', '.join(KINDS)}")
+
 
 @dataclass(frozen=True)
 class Service:
