@@ -12,6 +12,7 @@ from __future__ import annotations
 import tempfile
 import time
 from pathlib import Path
+from typing import Any, Callable
 
 import numpy as np
 
@@ -29,51 +30,43 @@ def _ms(samples: list[float]) -> tuple[float, float]:
     return round(float(np.median(a)), 3), round(float(np.percentile(a, 99)), 3)
 
 
+def _timed(call: Callable[[], Any], n: int) -> tuple[list[float], Any]:
+    """(seconds of each of n calls, the last call's value)."""
+    seconds, value = [], None
+    for _ in range(n):
+        start = time.perf_counter()
+        value = call()
+        seconds.append(time.perf_counter() - start)
+    return seconds, value
+
+
 def _stage_medians(runs: list) -> dict[str, float]:
     stages = {k for _, _, seconds in runs for k in seconds}
     return {k: round(float(np.median([sec.get(k, 0.0) for _, _, sec in runs])), 3) for k in sorted(stages)}
 
 
-def _captures(camera, frames: int) -> list[float]:
-    shots = []
-    for _ in range(frames):
-        start = time.perf_counter()
-        camera.capture()
-        shots.append(time.perf_counter() - start)
-    return shots
-
-
-def _paired_jobs(net: NetCell, t, method: str, seeds: list[int], T_base_cam: np.ndarray) -> tuple[list, list]:
-    """Each seed's job over the network and in-process, one planning scene for both, the order
-    alternating from seed to seed (so neither always runs first):
+def _paired_jobs(net: NetCell, local, t, method: str, seeds: list[int], T_base_cam: np.ndarray) -> tuple[list, list]:
+    """Each seed's job over the network and in the in-process cell `local`, one planning scene for
+    both, the order alternating from seed to seed (so neither always runs first):
     ([(wall s, success, stage seconds)] net, the same in-process)."""
     from app.motion.scene import PlanningScene
-    from app.sim.cell import CellConfig, SimCell
     from app.sim.jobs import JobSpec, run_sim_job
 
-    remote, local = [], []
-    with SimCell(CellConfig()) as cell:
-        scene = PlanningScene(CellConfig())
-        try:
-            for i, seed in enumerate(seeds):
-                for where in ("net", "local") if i % 2 == 0 else ("local", "net"):  # each order half the time
-                    start = time.perf_counter()
-                    if where == "net":
-                        [r] = run_remote_series(net, CellLayout(), t, [seed], "upright", T_base_cam,
-                                                JobConfig(method=method), scene=scene)
-                    else:
-                        r = run_sim_job(cell, scene, T_base_cam, JobSpec(t, seed, "upright"), JobConfig(method=method))
-                    (remote if where == "net" else local).append((time.perf_counter() - start, r.success, r.seconds))
-        finally:
-            scene.close()
-    return remote, local
-
-
-def _in_process_captures(frames: int) -> list[float]:
-    from app.sim.cell import CellConfig, SimCell
-
-    with SimCell(CellConfig()) as cell:
-        return _captures(cell.camera, frames)
+    remote, here = [], []
+    scene = PlanningScene(local.config)
+    try:
+        for i, seed in enumerate(seeds):
+            for where in ("net", "local") if i % 2 == 0 else ("local", "net"):  # each order half the time
+                start = time.perf_counter()
+                if where == "net":
+                    [r] = run_remote_series(net, CellLayout(), t, [seed], "upright", T_base_cam,
+                                            JobConfig(method=method), scene=scene)
+                else:
+                    r = run_sim_job(local, scene, T_base_cam, JobSpec(t, seed, "upright"), JobConfig(method=method))
+                (remote if where == "net" else here).append((time.perf_counter() - start, r.success, r.seconds))
+    finally:
+        scene.close()
+    return remote, here
 
 
 def run_net_benchmark(reads: int, frames: int, jobs: int, task_name: str = "bowl", method: str = "nift",
@@ -84,20 +77,15 @@ def run_net_benchmark(reads: int, frames: int, jobs: int, task_name: str = "bowl
     from app.sim.cell import CellConfig, SimCell
 
     t = task(task_name)
-    with SimCell(CellConfig()) as cell:
-        T_base_cam = ensure_calibration(cell, calibration)
     figures: dict = {}
-    with tempfile.TemporaryDirectory() as tmp:
+    with SimCell(CellConfig()) as local, tempfile.TemporaryDirectory() as tmp:
+        T_base_cam = ensure_calibration(local, calibration)
         token_file = Path(tmp) / "token"
         with served_cell(token_file, "--no-advertise") as (address, _):
             token = read_token(token_file)
             arm = NetClient(address, token, "arm")
             arm.call("getActualQ")
-            lat = []
-            for _ in range(reads):
-                start = time.perf_counter()
-                arm.call("getActualQ")
-                lat.append(time.perf_counter() - start)
+            lat, _ = _timed(lambda: arm.call("getActualQ"), reads)
             figures["state_read_median_ms"], figures["state_read_p99_ms"] = _ms(lat)
             start, n = time.perf_counter(), 0
             while time.perf_counter() - start < 1.0:
@@ -108,19 +96,15 @@ def run_net_benchmark(reads: int, frames: int, jobs: int, task_name: str = "bowl
             device = NetDeviceConfig(address=address, token=token)
             with NetCell(NetCellConfig(device, device, device, NetDeviceConfig(address=address, token=token,
                                                                                motion_timeout=600.0))) as cell:
-                figures["capture_net_median_ms"] = _ms(_captures(cell.camera, frames))[0]
+                figures["capture_net_median_ms"] = _ms(_timed(cell.camera.capture, frames)[0])[0]
                 camera = NetClient(address, token, "camera")
-                sent = []
-                for _ in range(frames):
-                    start = time.perf_counter()
-                    frame = camera.call("last_frame")
-                    sent.append(time.perf_counter() - start)
+                sent, frame = _timed(lambda: camera.call("last_frame"), frames)
                 camera.close()
                 if frame["depth"].shape != (424, 512):
                     raise RuntimeError(f"the served camera sent a {frame['depth'].shape} depth frame, not 424 x 512")
                 figures["depth_frame_delivery_median_ms"], figures["depth_frame_delivery_p99_ms"] = _ms(sent)
-                net_walls, walls = _paired_jobs(cell, t, method, [seed + i for i in range(jobs)], T_base_cam)
-    figures["capture_in_process_median_ms"] = _ms(_in_process_captures(frames))[0]
+                net_walls, walls = _paired_jobs(cell, local, t, method, [seed + i for i in range(jobs)], T_base_cam)
+        figures["capture_in_process_median_ms"] = _ms(_timed(local.camera.capture, frames)[0])[0]
     if jobs:
         figures["jobs"] = f"{jobs} {t.name} jobs, seeds {seed}-{seed + jobs - 1}, {method}"
         figures["job_wall_in_process_s"] = round(float(np.mean([w for w, _, _ in walls])), 2)
