@@ -208,6 +208,7 @@ def test_the_whole_job_over_the_network_matches_the_in_process_cell(tmp_path):
         local = run_sim_job(cell, scene, T_base_cam, JobSpec(task("bowl"), 0, "upright"))
         scene.close()
     assert net.success and local.success, (net.reason, local.reason)
-    for stage in ("grasp", "place"):
-        assert np.allclose(net.poses[stage], local.poses[stage], atol=1e-4)
+    for stage in ("grasp", "place"):  # on a mismatch, say which pair and attempts each job took
+        assert np.allclose(net.poses[stage], local.poses[stage], atol=1e-4), (
+            stage, net.attempts, local.attempts, net.candidates[:3], local.candidates[:3], net.look, local.look)
     assert net.info["instance"] == local.info["instance"]
