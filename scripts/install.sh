@@ -1,11 +1,14 @@
 #!/usr/bin/env bash
 # Installs NIFT cell into ./.venv: the Debian libraries Open3D needs, then the package itself.
-# Usage: scripts/install.sh [--test]      (--test adds pytest; NIFT_UNPINNED=1 skips scripts/constraints.txt)
+# Usage: scripts/install.sh [--test]      (--test adds pytest, Selenium and Debian's Chromium for the
+#                                          teach page's browser test; NIFT_UNPINNED=1 skips scripts/constraints.txt)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
 need_apt=()
-for pkg in libusb-1.0-0 libgl1 libgomp1; do
+debian=(libusb-1.0-0 libgl1 libgomp1)
+[ "${1:-}" = "--test" ] && debian+=(chromium chromium-driver)  # a real browser, from Debian (no download at run time)
+for pkg in "${debian[@]}"; do
     dpkg -s "$pkg" >/dev/null 2>&1 || need_apt+=("$pkg")
 done
 if [ ${#need_apt[@]} -gt 0 ]; then

@@ -6,6 +6,9 @@ import os
 from pathlib import Path
 
 import numpy as np
+import trimesh
+
+from app.objects import generate
 
 CORPUS: list[tuple[tuple[str, ...], str]] = [
     # run
@@ -55,6 +58,16 @@ CORPUS: list[tuple[tuple[str, ...], str]] = [
     (("objects", "--category", "teapot"), "--category"),
     (("objects", "--category", "mug", "--out", "sheet.txt"), "sheet.txt"),
     (("sim", "--config", "unknown.toml"), "colour"),
+    (("objects", "import", "notamesh.obj", "--category", "mug"), "notamesh.obj"),
+    (("objects", "import", "missing.obj", "--category", "mug"), "missing.obj"),
+    (("objects", "import", "mug-mm.stl", "--category", "mug", "--units", "m"), "--units"),
+    (("objects", "import", "sheet.stl", "--category", "mug"), "sheet.stl"),
+    (("objects", "import", "mug-mm.stl", "--category", "mug", "--name", "My Mug"), "My Mug"),
+    (("objects", "import", "mug-mm.stl", "--category", "teapot"), "--category"),
+    (("objects", "import", "mug-mm.stl", "--category", "mug", "--collision-faces", "5"), "--collision-faces"),
+    (("run", "--task", "mug", "--object", "nosuch"), "nosuch"),
+    (("bench", "--tasks", "mug", "--objects", "nosuch", "--out", "b"), "nosuch"),
+    (("bench", "--demo-dir", "missing-demos", "--out", "b"), "missing-demos"),
     # make-data, train
     (("make-data", "--out", "data", "--instances", "0"), "--instances"),
     (("make-data", "--out", "afile"), "afile"),
@@ -120,6 +133,12 @@ def make_inputs(root: Path) -> None:
              "garbage.json": "{not json", "list.json": "[1, 2, 3]", "poses.json": '{"grasp": 3}', "afile": "x"}
     for name, text in files.items():
         (root / name).write_text(text)
+    (root / "notamesh.obj").write_text("v 0 0 zero\nthis is not a mesh\n")
+    sheet = trimesh.Trimesh([[0, 0, 0], [0.1, 0, 0], [0.1, 0.1, 0], [0, 0.1, 0]], [[0, 1, 2], [0, 2, 3]])
+    sheet.export(root / "sheet.stl")
+    mug = generate("mug", 1)
+    mug.apply_scale(1000.0)  # millimetres: as metres, 100 m across
+    mug.export(root / "mug-mm.stl")
     for name in ("adir", "emptydata"):
         (root / name).mkdir()
     os.chmod(root / "afile", 0o644)

@@ -1,7 +1,9 @@
 """The demos a benchmark run imitates.
 
-The recorded ones (`demos/<task>/`, seen by the cell's Kinect) when the run uses all ten and the
-single camera. Otherwise a copy in `<out>/demos/<task>/`: the first `--demos N` of them, and with
+The recorded ones (`demos/<task>/`, or `--demo-dir`'s, seen by the cell's Kinect) when the run uses
+all ten and the single camera and, in the project's own `demos/`, every template it needs is there
+(the run never writes into the project). Otherwise a copy in `<out>/demos/<task>/`: the first
+`--demos N` of them, and with
 `--camera fused` each demo's cloud ray cast again from the four fused cameras at the demo object's
 recorded pose - in the paper's simulated setting demos and test objects are both seen fused, so a
 template built from single-view demo clouds would compare unlike with unlike. The copies are made
@@ -31,15 +33,19 @@ def seen_by(demo: Demo, camera: str, cell: CellConfig, seed: int) -> Demo:
     return dataclasses.replace(demo, cloud=cloud)
 
 
-def bench_demos(config: BenchConfig, out: Path) -> Path:
-    """The directory whose `<task>/` folders hold the run's demos (made on first use)."""
-    if config.demos == 10 and config.camera == "single":
-        return DEMOS_DIR
+def bench_demos(config: BenchConfig, out: Path, templates: list[str] = ()) -> Path:
+    """The directory whose `<task>/` folders hold the run's demos (made on first use); `templates`:
+    the template file names the run reads in each."""
+    source = Path(config.demo_dir) if config.demo_dir else DEMOS_DIR
+    folders = sorted({task(t).demos for t in config.tasks})
+    shipped = all((source / name / f).is_file() for name in folders for f in templates)
+    if config.demos == 10 and config.camera == "single" and (source != DEMOS_DIR or shipped):
+        return source
     root = out / "demos"
-    for name in sorted({task(t).demos for t in config.tasks}):
+    for name in folders:
         target = root / name
         target.mkdir(parents=True, exist_ok=True)
-        for i, path in enumerate(sorted((DEMOS_DIR / name).glob(DEMO_GLOB))[: config.demos]):
+        for i, path in enumerate(sorted((source / name).glob(DEMO_GLOB))[: config.demos]):
             dest = target / path.name
             if dest.exists():
                 continue

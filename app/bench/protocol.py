@@ -11,6 +11,7 @@ around the object (the paper's simulated setting), resampled to 1,024 points.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 import trimesh
@@ -47,7 +48,13 @@ class BenchConfig:
     feasible: bool = True  # rank template methods' candidate poses by feasibility first (app.predict.feasibility)
     place_contact_scale: float = ImitationConfig.place_contact_scale  # contact weighting of place templates; 0: the paper's
     place_demo_match: str = ImitationConfig.place_demo_match  # place poses against the demos' mean features or the nearest demo's
+    objects: tuple[str, ...] = ()  # imported objects (app.objects.library) instead of procedural ones: a task's trials cycle over those of its category
+    demo_dir: str | None = None  # the directory whose <task>/ folders hold the demos (default: the project's demos/)
     cell: CellConfig = field(default_factory=CellConfig)
+
+    def objects_for(self, category: str) -> tuple[str, ...]:
+        """The named imported objects a task of `category` cycles over (none: procedural objects)."""
+        return tuple(n for n in self.objects if imported_category(n) == category)
 
     def imitation(self, index: int) -> ImitationConfig:
         """The optimiser settings of trial `index` (its seed is the index, as for every method)."""
@@ -80,6 +87,25 @@ class BenchConfig:
             raise ValueError("--setting executed runs the cell, which has one Kinect: use --camera single")
         if self.nif is not None and self.setting == "executed":
             raise ValueError("--fields applies to the teleported setting only (jobs use the shipped fields)")
+        if self.objects:
+            from app.tasks.task import task
+
+            for name in self.tasks:
+                t = task(name)
+                if not self.objects_for(t.category):
+                    raise ValueError(f"--objects names no {t.category} for the {name} task; "
+                                     f"name one or leave the task out of --tasks")
+            if "teacher" in self.methods:
+                raise ValueError("the teacher needs procedural objects' landmarks; leave it out with --objects")
+        if self.demo_dir is not None and not Path(self.demo_dir).is_dir():
+            raise ValueError(f"--demo-dir {self.demo_dir}: no such directory")
+
+
+def imported_category(name: str) -> str:
+    """The category of a library object (a one-line error if there is none of that name)."""
+    from app.objects.library import load_object
+
+    return load_object(name).category
 
 
 @dataclass(frozen=True)

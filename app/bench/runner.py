@@ -22,11 +22,11 @@ from app.bench.protocol import BenchConfig, Trial, trials
 from app.io_utils import write_json
 from app.nift.template import weights_id
 from app.predict.methods import ORACLE, check_method
-from app.tasks.library import task_templates
+from app.tasks.library import STAGES, task_templates, template_path
 from app.tasks.task import task
 
 FORMAT = "nift-bench/1"
-ADDED = {"place_demo_match": "mean", "align_grasp": False}  # settings added since the format, with the value runs made before them had
+ADDED = {"place_demo_match": "mean", "align_grasp": False, "objects": [], "demo_dir": None}  # settings added since the format, with the value runs made before them had
 _worker = None  # the per-process bench (a world, or the sim cell), made by _init_worker
 
 
@@ -59,7 +59,7 @@ def prepare(config: BenchConfig, out: Path) -> Path:
                              f"ask for at least that many or choose another --out")
     # more trials than before extend the run: a trial's seed depends on its index alone (protocol.py)
     write_json(run_file, wanted)
-    root = bench_demos(config, out)
+    root = bench_demos(config, out, template_files(config))
     for name in config.tasks:
         t = task(name)
         for method in config.methods:
@@ -67,6 +67,16 @@ def prepare(config: BenchConfig, out: Path) -> Path:
                 query, feature = check_method(method).split("-")
                 task_templates(t, root / t.demos, query, feature, nif=config.fields)
     return root
+
+
+def template_files(config: BenchConfig) -> list[str]:
+    """Names of the template files the run's template methods read in each task folder."""
+    names = []
+    for method in config.methods:
+        if method not in (ORACLE, "cpd"):
+            query, feature = check_method(method).split("-")
+            names += [template_path(Path(), s, query, feature, config.fields).name for s in STAGES]
+    return names
 
 
 def read_rows(out: Path) -> list[dict]:
@@ -103,7 +113,7 @@ def _init_worker(config: BenchConfig, demo_root: Path) -> None:
 
     torch.set_num_threads(1)
     bench = ExecutedBench if config.setting == "executed" else TeleportedBench
-    _worker = (bench(config.cell), config, demo_root)
+    _worker = (bench(config.cell, config.objects), config, demo_root)
 
 
 def _run_trial(trial: Trial) -> list[dict]:

@@ -22,6 +22,7 @@ from app.sim.cell import CellConfig, SimCell, add_fixtures
 from app.sim.jobs import JobSpec, run_sim_job, spawn_test_object
 from app.sim.judges import judge_grasp, judge_place
 from app.sim.oracle import teacher_prediction
+from app.objects.library import LibraryObject, load_object
 from app.sim.spawn import SpawnedObject, spawn
 from app.tasks.task import task
 from hardware.gripper_geometry import lowest_point
@@ -30,11 +31,24 @@ from hardware.sim.world import SimWorld, SimWorldConfig
 IN_TABLE = 0.002  # m below the table top that count as into the table
 
 
+class ImportedObjects:
+    """The imported objects of a run, loaded once per worker: trial i of a task takes the i-th of its
+    category's, cyclically (none named: procedural objects)."""
+
+    def __init__(self, names: tuple[str, ...]) -> None:
+        self.objects = [load_object(n) for n in names]
+
+    def source(self, trial: Trial) -> LibraryObject | None:
+        own = [o for o in self.objects if o.category == task(trial.task).category]
+        return own[trial.index % len(own)] if own else None
+
+
 class TeleportedBench:
     """A physics world with the fixtures, reused for every trial of a worker."""
 
-    def __init__(self, cell: CellConfig) -> None:
+    def __init__(self, cell: CellConfig, objects: tuple[str, ...] = ()) -> None:
         self.cell = cell
+        self.source = ImportedObjects(objects).source
         self.world = SimWorld(SimWorldConfig())
         self.world.connect()
         self.fixtures = add_fixtures(self.world, cell)
@@ -46,7 +60,7 @@ class TeleportedBench:
         """The trial's object (removed again from the world), its pose T_base_obj and the cloud
         (1024, 3) the camera setting sees - drawn from the trial's seed, the same for every method."""
         rng = np.random.default_rng(trial.seed(seed))
-        obj = spawn_test_object(self.world, task(trial.task), trial.pose, rng)
+        obj = spawn_test_object(self.world, task(trial.task), trial.pose, rng, self.source(trial))
         T_base_obj = self.world.pose(obj.body)
         self.world.remove(obj.body)
         return obj, T_base_obj, trial_cloud(obj.mesh, T_base_obj, camera, rng, self.cell)
@@ -57,7 +71,7 @@ class TeleportedBench:
         obj, T_base_obj, cloud = self.observe(trial, config.camera, config.seed)
         T_base_fixture = self.cell.fixture_pose(t.fixture)
         base = {"trial": trial.key, "task": t.name, "pose": trial.pose, "index": trial.index, "instance": obj.seed,
-                "scale": round(obj.scale, 4)}
+                "scale": round(obj.scale, 4), **({"object": obj.source.name} if obj.source else {})}
         rows = []
         for method in config.methods:
             start = time.perf_counter()
@@ -86,7 +100,8 @@ class TeleportedBench:
 
     def judge_copy(self, obj, T_base_obj, pose, judge):
         """Run a judge on a fresh copy of the trial's object in the trial's pose."""
-        copy = spawn(self.world, obj.category, obj.seed, pose, scale=obj.scale, T_world_obj=T_base_obj)
+        copy = spawn(self.world, obj.category, obj.seed, pose, scale=obj.scale, T_world_obj=T_base_obj,
+                     source=obj.source)
         try:
             return judge(copy)
         finally:
@@ -96,7 +111,8 @@ class TeleportedBench:
 class ExecutedBench:
     """The sim cell with its planning scene, reused for every trial of a worker."""
 
-    def __init__(self, cell: CellConfig) -> None:
+    def __init__(self, cell: CellConfig, objects: tuple[str, ...] = ()) -> None:
+        self.source = ImportedObjects(objects).source
         self.sim = SimCell(cell)
         self.sim.connect()
         self.scene = PlanningScene(cell)
@@ -113,7 +129,8 @@ class ExecutedBench:
             job = JobConfig(method=method, demos=demo_root / t.demos, imitation=config.imitation(trial.index),
                             center_grasp=config.center_grasp, feasible=config.feasible,
                             align_grasp=config.aligns)
-            r = run_sim_job(self.sim, self.scene, self.T_base_cam, JobSpec(t, tuple(trial.seed(config.seed)), trial.pose), job)
+            spec = JobSpec(t, tuple(trial.seed(config.seed)), trial.pose, self.source(trial))
+            r = run_sim_job(self.sim, self.scene, self.T_base_cam, spec, job)
             failed = r.failed_stage or ""
             grasp = r.success or failed in ("place", "release", "retreat", "verify")  # held through the carry
             rows.append({"trial": trial.key, "task": t.name, "pose": trial.pose, "index": trial.index,

@@ -45,6 +45,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--place-demo-match", choices=DEMO_MATCHES, default=ImitationConfig.place_demo_match,
                    help="compare a place pose with the demos' mean features (mean, the paper's) or with each demo's "
                         f"own, taking the nearest (nearest); default {ImitationConfig.place_demo_match} (docs/additions.md)")
+    p.add_argument("--objects", metavar="NAMES", help="comma list of imported objects (nift objects import) to use "
+                   "instead of procedural ones; each task's trials cycle over those of its category")
+    p.add_argument("--demo-dir", type=Path, metavar="DIR",
+                   help="the directory whose <task>/ folders hold the demos (default: the project's demos/)")
     p.add_argument("--workers", type=int, default=2, help="worker processes (default 2, one per core)")
     p.add_argument("--minutes", type=float,
                    help="stop after this wall time and write the table of the trials done (the same command resumes)")
@@ -83,7 +87,9 @@ def run(args: argparse.Namespace) -> int:
     config = BenchConfig(tasks, poses, methods, args.trials, args.demos, args.camera, args.setting, args.seed,
                          args.nif, center_grasp=args.center_grasp, align_grasp=args.align_grasp,
                          feasible=args.feasible,
-                         place_contact_scale=args.place_contact_scale, place_demo_match=args.place_demo_match)
+                         place_contact_scale=args.place_contact_scale, place_demo_match=args.place_demo_match,
+                         objects=_names(args.objects or ""),
+                         demo_dir=str(args.demo_dir.resolve()) if args.demo_dir else None)
     config.check()  # before the progress bar: the error is the only line
     writable_directory(args.out, "--out")
     if args.nif is not None:  # the weights load before any work (and before the bar)

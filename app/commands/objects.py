@@ -1,4 +1,5 @@
-"""`nift objects`: render a contact sheet of procedural instances (and optionally export them)."""
+"""`nift objects`: render a contact sheet of procedural instances (and optionally export them);
+`nift objects import` brings a user's mesh into the local object library, `nift objects list` lists it."""
 from __future__ import annotations
 
 import argparse
@@ -8,12 +9,26 @@ from pathlib import Path
 import numpy as np
 
 NAME = "objects"
-HELP = "render a contact sheet of procedural object instances; optionally export meshes"
+HELP = "render a contact sheet of procedural object instances; import your own meshes (objects import)"
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     from app.categories import CATEGORIES
 
+    actions = p.add_subparsers(dest="action", metavar="ACTION")
+    imp = actions.add_parser("import", help="bring a mesh file (OBJ, STL, PLY, GLB) into the local object library")
+    imp.add_argument("mesh", type=Path, help="the mesh file")
+    imp.add_argument("--category", required=True, choices=CATEGORIES, help="which category it is an object of")
+    imp.add_argument("--name", help="the name it is used by (default: the file's stem, lower-cased)")
+    imp.add_argument("--units", choices=("m", "cm", "mm", "in"),
+                     help="the file's length unit (default: inferred from the size when only one unit fits)")
+    imp.add_argument("--up", default="z", choices=("z", "y", "x", "-z", "-y", "-x"),
+                     help="the file's axis that points up (default z; many scanners and GLB files use y)")
+    imp.add_argument("--collision-faces", type=int, default=2000,
+                     help="triangles the mesh is simplified to before convex decomposition (default 2000)")
+    imp.add_argument("--replace", action="store_true", help="overwrite an object of the same name")
+    imp.add_argument("--json", action="store_true", help="print the object's record as JSON")
+    actions.add_parser("list", help="list the objects in the local object library ($NIFT_OBJECTS)")
     p.add_argument("--category", default="mug", choices=CATEGORIES, help="object category (default: mug)")
     p.add_argument("--count", type=int, default=16, help="number of instances (default: 16)")
     p.add_argument("--split", default="test", choices=["train", "test"], help="seed split to draw from")
@@ -34,6 +49,48 @@ def pick_seeds(category: str, split_name: str, count: int, seed: int) -> list[in
 
 
 def run(args: argparse.Namespace) -> int:
+    if getattr(args, "action", None) == "import":
+        return import_mesh(args)
+    if getattr(args, "action", None) == "list":
+        return list_objects()
+    return contact(args)
+
+
+def import_mesh(args: argparse.Namespace) -> int:
+    """`nift objects import`: check, repair, scale, frame, decompose and store a mesh."""
+    from app.objects import library
+
+    if not 100 <= args.collision_faces <= 100_000:
+        raise ValueError(f"--collision-faces must be between 100 and 100000, got {args.collision_faces}")
+    name = args.name or args.mesh.stem.lower()
+    library.check_name(name)
+    obj, notes = library.import_object(args.mesh, args.category, name, args.units, args.up, replace=args.replace,
+                                       faces=args.collision_faces)
+    if args.json:
+        print(json.dumps({"name": obj.name, "directory": str(obj.collision.parent), **obj.info}, indent=2))
+    else:
+        print(f"{obj.name} ({obj.category}) -> {obj.collision.parent}")
+        for note in notes:
+            print(f"  {note}")
+    return 0
+
+
+def list_objects() -> int:
+    """`nift objects list`."""
+    from app.objects import library
+
+    names = library.object_names()
+    if not names:
+        print(f"no objects in {library.library_dir()} (nift objects import MESH --category C --name N)")
+    for name in names:
+        obj = library.load_object(name)
+        x, y, z = (100 * e for e in obj.info["extents_m"])
+        print(f"{name:24s} {obj.category:7s} {x:5.1f} x {y:5.1f} x {z:5.1f} cm  from {obj.info['source']}")
+    return 0
+
+
+def contact(args: argparse.Namespace) -> int:
+    """The contact sheet of procedural instances."""
     from app.io_utils import writable_directory, writable_file
     from app.objects import generate, semantics
     from app.objects.sheet import contact_sheet

@@ -23,6 +23,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--jobs", type=int, default=1, help="run a series of this many jobs")
     p.add_argument("--method", default="nift", choices=SIM_METHODS,
                    help="how grasp and place poses are found (teacher: the simulator's ground truth, an oracle)")
+    p.add_argument("--object", metavar="NAME", help="an imported object (nift objects import) instead of unseen "
+                   "procedural ones; each job puts it in a new pose")
     p.add_argument("--demos", type=Path, help="task directory (default demos/<task>)")
     p.add_argument("--record", type=Path, help="PNG strip of key frames (a series writes NAME-00.png, ...)")
     p.add_argument("--calibration", type=Path, default=Path("calibration.json"),
@@ -46,9 +48,27 @@ def run(args: argparse.Namespace) -> int:
     if args.record is not None and args.record.suffix.lower() != ".png":
         raise ValueError(f"--record {args.record}: key frames are written as a PNG strip; give a .png path")
     t = task(args.task)
+    source = imported(args.object, t, args.method) if args.object else None
+    if source is not None and args.devices == "net":
+        raise ValueError("--object needs the simulated cell in this process (--devices sim)")
+    args.source = source
     config = JobConfig(method=args.method, demos=args.demos, second_look=args.second_look)
     results = _run_net(args, t, config) if args.devices == "net" else _run_sim(args, t, config)
     return _report(results, args, t)
+
+
+def imported(name: str, t, method: str):
+    """The library object `name`, checked against the task and the method; a one-line error if unfit."""
+    from app.objects.library import load_object
+    from app.predict.methods import ORACLE
+
+    source = load_object(name)
+    if source.category != t.category:
+        raise ValueError(f"--object {name} is a {source.category}; the {t.name} task takes a {t.category}")
+    if method == ORACLE:
+        raise ValueError(f"--method {ORACLE} needs a procedural object's landmarks and {name!r} is imported; "
+                         f"use a learned method")
+    return source
 
 
 def _run_sim(args: argparse.Namespace, t, config) -> list:
@@ -61,7 +81,7 @@ def _run_sim(args: argparse.Namespace, t, config) -> list:
     from app.sim.cell import SimCell
     from app.sim.jobs import JobSpec, run_series
 
-    specs = [JobSpec(t, args.seed + i, args.pose) for i in range(args.jobs)]
+    specs = [JobSpec(t, args.seed + i, args.pose, args.source) for i in range(args.jobs)]
     cell_cfg = cell_config(args, gui=args.gui)
     bar = tqdm(total=len(specs), unit="job", desc=f"nift run {t.name}", disable=len(specs) == 1 or args.json)
     done = []
@@ -117,7 +137,8 @@ def _report(results: list, args: argparse.Namespace, t) -> int:
 
 def _line(r) -> str:
     what = "ok" if r.success else f"FAILED at {r.failed_stage}: {r.reason}"
-    return f"seed {r.info['seed']} ({r.task} {r.info['instance']}, scale {r.info['scale']}): {what}"
+    which = r.info.get("object") or f"{r.task} {r.info['instance']}"
+    return f"seed {r.info['seed']} ({which}, scale {r.info['scale']}): {what}"
 
 
 def _print_one(r) -> None:

@@ -68,6 +68,10 @@ def generate(category: str, seed: int) -> trimesh.Trimesh:
 def semantics(mesh: trimesh.Trimesh) -> Semantics:
     """The semantic landmarks of a mesh made by `generate` (canonical frame)."""
     sem = mesh.metadata.get("semantics")
+    if mesh.metadata.get("imported"):
+        name = mesh.metadata.get("name", "it")
+        raise ValueError(f"the scripted teacher needs a procedural object's landmarks and {name!r} is imported; "
+                         f"teach it yourself (nift teach --web --object {name})")
     if not isinstance(sem, Semantics):
         raise ValueError("this mesh has no semantics: only meshes from app.objects.generate carry them")
     return sem

@@ -1,39 +1,189 @@
-"""Bring-your-own objects: load an OBJ / STL / PLY / GLB mesh and check it is usable."""
+"""Bring-your-own objects: read a scanned or modelled mesh, repair it, put it in the canonical frame.
+
+A scan arrives with texture seams (the same point stored once per UV island, so the surface looks
+open along every seam), small holes, arbitrary units and its own "up". `prepare_mesh` merges the
+seam vertices (trimesh), fills what is still open (trimesh, then MeshFix through pymeshfix when
+that is not enough), scales to metres (from `units`, or the size when that is unambiguous), turns
+the file's up axis to +z and puts the object on z = 0 with the centre of its footprint (the
+lowest slice's convex hull, so a mug's handle does not pull its axis off z) on the z axis.
+Every step that changed something is reported in `notes`.
+"""
 from __future__ import annotations
 
+from dataclasses import dataclass, field
 from pathlib import Path
 
+import numpy as np
 import trimesh
 
 FORMATS = (".obj", ".stl", ".ply", ".glb", ".gltf", ".off")
+UNITS = {"m": 1.0, "cm": 0.01, "mm": 0.001, "in": 0.0254}
+UP_AXES = ("z", "y", "x", "-z", "-y", "-x")
+SIZE_RANGE = (0.02, 0.6)  # m: the largest extent a graspable object can have in this cell
+KEPT_VOLUME = 0.05  # MeshFix keeps the largest component: less than this share of the hull is a failure
+FOOTPRINT = 0.005  # m (after scaling): the slice above the lowest point whose hull is the footprint
 
 
-def load_mesh(path: str | Path, upright: bool = False) -> trimesh.Trimesh:
-    """A single watertight triangle mesh from a file, or a one-line ValueError saying what is wrong.
+@dataclass(frozen=True)
+class PreparedMesh:
+    """A mesh in the canonical frame, in metres, watertight, and what was done to get there."""
 
-    Multi-part files (GLB scenes) are merged. With `upright=True` the mesh is moved so that its
-    lowest point rests on z = 0 and its bounding-box centre is on the z axis (our canonical frame
-    for objects whose file frame is already z-up).
-    """
+    mesh: trimesh.Trimesh
+    notes: list[str] = field(default_factory=list)
+    scale: float = 1.0  # metres per file unit
+    units: str = "m"
+
+
+def read_mesh(path: str | Path) -> trimesh.Trimesh:
+    """The file's triangles as one mesh, vertices as stored (no merging); a one-line error if it is none."""
     path = Path(path)
-    if not path.exists():
+    if not path.is_file():
         raise FileNotFoundError(f"{path}: no such mesh file")
     if path.suffix.lower() not in FORMATS:
         raise ValueError(f"{path}: unsupported mesh format {path.suffix!r}; use one of {', '.join(FORMATS)}")
     try:
-        loaded = trimesh.load(path, force="mesh", process=True)
+        loaded = trimesh.load(path, force="mesh", process=False)
     except Exception as exc:  # trimesh raises many types for corrupt files
-        raise ValueError(f"{path}: could not read as {path.suffix} ({exc})") from exc
+        raise ValueError(f"{path}: could not read as {path.suffix} ({type(exc).__name__})") from None
     if not isinstance(loaded, trimesh.Trimesh) or len(loaded.faces) == 0:
         raise ValueError(f"{path}: holds no triangles")
-    if not loaded.is_watertight:
-        open_edges = len(trimesh.grouping.group_rows(loaded.edges_sorted, require_count=1))
-        raise ValueError(f"{path}: mesh is not watertight ({open_edges} open edges); close its holes "
-                         f"(e.g. trimesh.repair.fill_holes or a remesh) before using it")
-    if loaded.volume < 0:
-        loaded.invert()
-    if upright:
-        lo, hi = loaded.bounds
-        loaded.apply_translation([-(lo[0] + hi[0]) / 2, -(lo[1] + hi[1]) / 2, -lo[2]])
-    loaded.metadata["name"] = path.stem
+    if not np.isfinite(loaded.vertices).all():
+        raise ValueError(f"{path}: has non-finite vertex coordinates")
     return loaded
+
+
+def open_edges(mesh: trimesh.Trimesh) -> int:
+    """Edges used by one face only (0 for a closed surface)."""
+    return len(trimesh.grouping.group_rows(mesh.edges_sorted, require_count=1))
+
+
+def repair(mesh: trimesh.Trimesh, name: str = "mesh") -> tuple[trimesh.Trimesh, list[str]]:
+    """A watertight, outward-facing copy and the steps taken; a one-line error if it cannot be closed."""
+    notes: list[str] = []
+    out = trimesh.Trimesh(np.asarray(mesh.vertices, float), np.asarray(mesh.faces), process=False)
+    before, open_before = len(out.vertices), open_edges(out)
+    out.merge_vertices(merge_tex=True, merge_norm=True)  # texture seams store one point several times
+    out.update_faces(out.nondegenerate_faces())
+    out.update_faces(out.unique_faces())
+    out.remove_unreferenced_vertices()
+    if len(out.vertices) < before:
+        notes.append(f"merged {before - len(out.vertices)} duplicated vertices (texture seams); "
+                     f"open edges {open_before} -> {open_edges(out)}")
+    if not out.is_watertight:
+        holes = open_edges(out)
+        trimesh.repair.fill_holes(out)
+        if out.is_watertight:
+            notes.append(f"filled holes bounded by {holes} open edges (trimesh)")
+    if not out.is_watertight:
+        out = _meshfix(out, name)
+        notes.append("closed the surface with MeshFix (pymeshfix)")
+    trimesh.repair.fix_normals(out)
+    if out.volume <= 0:
+        raise ValueError(f"{name}: the repaired surface encloses no volume")
+    return out, notes
+
+
+def _meshfix(mesh: trimesh.Trimesh, name: str) -> trimesh.Trimesh:
+    """MeshFix's repair (holes, self-intersections, non-manifold parts), or a one-line error."""
+    from pymeshfix import MeshFix
+
+    fix = MeshFix(np.asarray(mesh.vertices, float), np.asarray(mesh.faces, np.int32))
+    fix.repair(remove_smallest_components=False)
+    points, faces = np.asarray(fix.points), np.asarray(fix.faces)
+    out = trimesh.Trimesh(points, faces, process=True) if len(faces) else None
+    if out is None or not out.is_watertight or out.volume < KEPT_VOLUME * abs(mesh.convex_hull.volume):
+        raise ValueError(f"{name}: not a closed surface and MeshFix could not repair it "
+                         f"({open_edges(mesh)} open edges); close it in a mesh editor")
+    return out
+
+
+def metres_per_unit(extent: float, units: str | None, name: str = "mesh") -> tuple[float, str]:
+    """(scale, units): the given units' scale, or the only units under which the largest extent is an
+    object's size (SIZE_RANGE); a one-line error naming the candidates when that is unclear."""
+    if units is not None:
+        if units not in UNITS:
+            raise ValueError(f"unknown units {units!r}; choose one of {', '.join(UNITS)}")
+        return UNITS[units], units
+    fits = [u for u, s in UNITS.items() if SIZE_RANGE[0] <= extent * s <= SIZE_RANGE[1]]
+    if len(fits) == 1:
+        return UNITS[fits[0]], fits[0]
+    if not fits:
+        raise ValueError(f"{name}: {extent:g} units across is no object's size in m, cm, mm or in; "
+                         f"give --units")
+    sizes = " or ".join(f"{extent * UNITS[u] * 100:.3g} cm ({u})" for u in fits)
+    raise ValueError(f"{name}: units unclear, {extent:g} units across could be {sizes}; give --units")
+
+
+def up_rotation(up: str) -> np.ndarray:
+    """(3, 3) rotation taking the file's `up` axis to +z."""
+    if up not in UP_AXES:
+        raise ValueError(f"unknown up axis {up!r}; choose one of {', '.join(UP_AXES)}")
+    sign = -1.0 if up.startswith("-") else 1.0
+    a = sign * np.eye(3)["xyz".index(up[-1])]
+    z = np.array([0.0, 0.0, 1.0])
+    if np.allclose(a, z):
+        return np.eye(3)
+    if np.allclose(a, -z):
+        return np.diag([1.0, -1.0, -1.0])  # half-turn about x
+    axis = np.cross(a, z)
+    return trimesh.transformations.rotation_matrix(np.pi / 2, axis)[:3, :3]
+
+
+def footprint_centre(vertices: np.ndarray, band: float = FOOTPRINT) -> np.ndarray:
+    """(2,) area centroid of the convex hull of the vertices (N, 3) within `band` of the lowest one."""
+    low = vertices[vertices[:, 2] <= vertices[:, 2].min() + band][:, :2]
+    if len(low) < 3:
+        return low.mean(axis=0)
+    try:
+        from scipy.spatial import ConvexHull
+
+        hull = low[ConvexHull(low).vertices]  # (H, 2), counter-clockwise
+    except Exception:  # a degenerate (collinear) footprint
+        return low.mean(axis=0)
+    x, y = hull[:, 0], hull[:, 1]
+    cross = x * np.roll(y, -1) - np.roll(x, -1) * y
+    area = cross.sum() / 2
+    return np.array([((x + np.roll(x, -1)) * cross).sum(), ((y + np.roll(y, -1)) * cross).sum()]) / (6 * area)
+
+
+def canonical_frame(mesh: trimesh.Trimesh, up: str = "z") -> trimesh.Trimesh:
+    """A copy turned so `up` is +z, resting on z = 0, its footprint centred on the z axis."""
+    out = mesh.copy()
+    T = np.eye(4)
+    T[:3, :3] = up_rotation(up)
+    out.apply_transform(T)
+    cx, cy = footprint_centre(np.asarray(out.vertices))
+    out.apply_translation([-cx, -cy, -out.vertices[:, 2].min()])
+    return out
+
+
+def prepare_mesh(mesh: trimesh.Trimesh, units: str | None = None, up: str = "z", name: str = "mesh") -> PreparedMesh:
+    """Repaired, metric and canonical (see the module's docstring), or a one-line error."""
+    repaired, notes = repair(mesh, name)
+    scale, units = metres_per_unit(float(repaired.extents.max()), units, name)
+    size = float(repaired.extents.max()) * scale
+    if not SIZE_RANGE[0] <= size <= SIZE_RANGE[1]:
+        raise ValueError(f"{name}: {size * 100:.3g} cm across in {units}; a graspable object is "
+                         f"{SIZE_RANGE[0] * 100:g}-{SIZE_RANGE[1] * 100:g} cm (check --units)")
+    if scale != 1.0:
+        repaired.apply_scale(scale)
+        notes.append(f"scaled from {units} to metres (x{scale:g})")
+    out = canonical_frame(repaired, up)
+    if up != "z":
+        notes.append(f"turned the file's {up} axis to +z")
+    notes.append(f"placed on z = 0, footprint centred on the z axis; {out.extents[0] * 100:.1f} x "
+                 f"{out.extents[1] * 100:.1f} x {out.extents[2] * 100:.1f} cm, {len(out.faces)} faces")
+    return PreparedMesh(out, notes, scale, units)
+
+
+def load_mesh(path: str | Path, upright: bool = False, units: str | None = "m", up: str = "z") -> trimesh.Trimesh:
+    """A single watertight triangle mesh from a file (repaired as `repair` can), or a one-line error;
+    with `upright=True` also scaled and put in the canonical frame (`prepare_mesh`)."""
+    path = Path(path)
+    raw = read_mesh(path)
+    if upright:
+        mesh = prepare_mesh(raw, units, up, path.name).mesh
+    else:
+        mesh, _ = repair(raw, path.name)
+    mesh.metadata["name"] = path.stem
+    return mesh

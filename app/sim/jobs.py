@@ -16,6 +16,7 @@ import numpy as np
 from app.jobs.job import JobConfig, JobHooks, JobResult, Predictor, run_job
 from app.motion.scene import PlanningScene
 from app.objects import split
+from app.objects.library import LibraryObject
 from app.predict.methods import ORACLE
 from app.sim.cell import SimCell
 from app.sim.judges import resting_verdict
@@ -31,11 +32,13 @@ SETTLE_TIME = 1.0  # s the object is left to come to rest before the verdict
 @dataclass(frozen=True)
 class JobSpec:
     """Which object a simulated job gets: the task, the pose setting, and the seed that picks the
-    test-split instance, its scale and its pose."""
+    test-split instance, its scale and its pose; or an imported object (at its own size), whose pose
+    the seed picks."""
 
     task: Task
     seed: int | tuple[int, ...]
     pose: str = "upright"
+    source: LibraryObject | None = None
 
 
 class SimHooks(JobHooks):
@@ -60,10 +63,15 @@ class SimHooks(JobHooks):
         return verdict.success, verdict.reason
 
 
-def spawn_test_object(world: SimWorld, t: Task, pose: str, rng: np.random.Generator) -> SpawnedObject:
-    """An unseen object: test-split instance, uniform scale and the pose setting's pose, all from rng."""
+def spawn_test_object(world: SimWorld, t: Task, pose: str, rng: np.random.Generator,
+                      source: LibraryObject | None = None) -> SpawnedObject:
+    """An unseen object: test-split instance, uniform scale and the pose setting's pose, all from rng;
+    or the imported `source` at scale 1 in a pose from rng."""
     instance = int(rng.choice(split(t.category, "test")))
-    return spawn(world, t.category, instance, pose, scale=float(rng.uniform(*SCALE_RANGE)), rng=rng)
+    scale = float(rng.uniform(*SCALE_RANGE))
+    if source is not None:
+        return spawn(world, t.category, instance, pose, rng=rng, source=source)
+    return spawn(world, t.category, instance, pose, scale=scale, rng=rng)
 
 
 def reset_arm(cell: SimCell) -> None:
@@ -81,7 +89,7 @@ def start_job(cell: SimCell, spec: JobSpec) -> SpawnedObject:
     alone) and the spec's object spawned."""
     reset_arm(cell)
     cell.camera.reseed(np.random.SeedSequence(spec.seed).spawn(1)[0])
-    return spawn_test_object(cell.world, spec.task, spec.pose, np.random.default_rng(spec.seed))
+    return spawn_test_object(cell.world, spec.task, spec.pose, np.random.default_rng(spec.seed), spec.source)
 
 
 def teacher_predictor(cell: SimCell, obj: SpawnedObject, t: Task) -> Predictor:
@@ -112,6 +120,8 @@ def run_sim_job(cell: SimCell, scene: PlanningScene, T_base_cam: np.ndarray, spe
     finally:
         cell.world.remove(obj.body)
     result.info = {"seed": spec.seed, "pose": spec.pose, "instance": obj.seed, "scale": round(obj.scale, 4)}
+    if obj.source is not None:
+        result.info["object"] = obj.source.name
     if record is not None:
         result.info["record"] = str(save_strip(hooks.frames, record))
     return result

@@ -6,7 +6,8 @@ random rotation, lowest point 5 mm above the table, held by a fixed constraint w
 and left to settle, as an object on a real table lies (a mug on its side, a bowl upside down).
 Scale is uniform. Masses are per category (documented below) times scale^3; the collision model is
 the CoACD decomposition of the unscaled instance, scaled by PyBullet (uniform scaling keeps convex
-parts convex).
+parts convex). An imported object (`app.objects.library`) is spawned from its own mesh and stored
+collision model; its `seed` only seeds the pose.
 """
 from __future__ import annotations
 
@@ -18,6 +19,7 @@ import trimesh
 from app.categories import POSES
 from app.objects import generate
 from app.objects.collision import collision_model, visual_model
+from app.objects.library import LibraryObject
 from app.sim.cell import WORKSPACE
 from hardware.bullet import p, pose_to_pybullet
 from hardware.se3 import make_pose, random_rotations, rotvec_to_matrix
@@ -40,6 +42,12 @@ class SpawnedObject:
     mesh: trimesh.Trimesh  # canonical frame, already scaled
     scale: float
     constraint: int | None = None
+    source: LibraryObject | None = None  # an imported object; None: the procedural (category, seed)
+
+    @property
+    def label(self) -> str:
+        """How the object is named in records: its library name, or category-seed."""
+        return self.source.name if self.source else f"{self.category}-{self.seed}"
 
 
 def sample_pose(mesh: trimesh.Trimesh, pose: str, rng: np.random.Generator) -> np.ndarray:
@@ -57,16 +65,21 @@ def sample_pose(mesh: trimesh.Trimesh, pose: str, rng: np.random.Generator) -> n
 
 
 def spawn(world: SimWorld, category: str, seed: int, pose: str = "upright", scale: float = 1.0,
-          rng: np.random.Generator | None = None, T_world_obj: np.ndarray | None = None) -> SpawnedObject:
-    """Add an instance to the world (at T_world_obj, or a sampled pose) and let it settle if free."""
+          rng: np.random.Generator | None = None, T_world_obj: np.ndarray | None = None,
+          source: LibraryObject | None = None) -> SpawnedObject:
+    """Add an instance (or the imported `source`) to the world (at T_world_obj, or a sampled pose) and
+    let it settle if free."""
     rng = rng or np.random.default_rng(seed)
-    canonical = generate(category, seed)
+    if source is not None and source.category != category:
+        raise ValueError(f"object {source.name!r} is a {source.category}, not a {category}")
+    canonical = source.mesh if source else generate(category, seed)
     mesh = canonical.copy()
     mesh.apply_scale(scale)
     T = sample_pose(mesh, pose, rng) if T_world_obj is None else T_world_obj
-    body = world.add_mesh(visual_model(canonical), collision_model(canonical), T, mass=MASS[category] * scale ** 3,
+    collision = source.collision if source else collision_model(canonical)
+    body = world.add_mesh(visual_model(canonical), collision, T, mass=MASS[category] * scale ** 3,
                           scale=scale, rgba=(0.35, 0.55, 0.85, 1.0))
-    obj = SpawnedObject(body, category, seed, mesh, scale)
+    obj = SpawnedObject(body, category, seed, mesh, scale, source=source)
     if pose == "arbitrary":
         hold(world, obj)
     world.step(60)  # settle on the table (held objects stay put)
