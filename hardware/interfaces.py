@@ -174,6 +174,18 @@ class Arm(Device):
     def getLastError(self) -> str:
         """Why the last motion did not complete ('' if it did)."""
 
+    @abstractmethod
+    def teachMode(self) -> bool:
+        """Freedrive: the joints yield to the operator's hand until endTeachMode(); motions are refused meanwhile."""
+
+    @abstractmethod
+    def endTeachMode(self) -> bool:
+        """Leave freedrive: the arm holds where the operator left it and takes motions again."""
+
+    @abstractmethod
+    def isTeachMode(self) -> bool:
+        """True while in freedrive."""
+
 
 class Gripper(Device):
     """A parallel two-finger gripper."""

@@ -19,6 +19,7 @@ import numpy as np
 
 from app.bench.protocol import BenchConfig, trial_cloud
 from app.objects.catalog import generate
+from app.objects.library import load_object
 from app.sim.cell import CellConfig
 from app.tasks.demo import DEMO_GLOB, Demo, load_demo, save_demo
 from app.tasks.library import DEMOS_DIR
@@ -27,7 +28,7 @@ from app.tasks.task import task
 
 def seen_by(demo: Demo, camera: str, cell: CellConfig, seed: int) -> Demo:
     """The demo with its cloud as the camera setting sees its object at the recorded pose."""
-    mesh = generate(demo.category, demo.seed)
+    mesh = load_object(demo.object).mesh if demo.object else generate(demo.category, demo.seed)
     mesh.apply_scale(demo.scale)
     cloud = trial_cloud(mesh, demo.T_base_obj, camera, np.random.default_rng(seed), cell)
     return dataclasses.replace(demo, cloud=cloud)

@@ -57,7 +57,8 @@ def record_demo(cell: SimCell, t: Task, seed: int, T_base_cam: np.ndarray, rng: 
     K = cell.camera.intrinsics
     demo = Demo(t.name, cloud, T_base_obj, T_base_obj @ T_obj_tcp, T_fixture_obj, T_base_fixture, T_base_cam,
                 {k: getattr(K, k) for k in ("width", "height", "fx", "fy", "cx", "cy")}, t.category, seed,
-                obj.scale, name, {"grasp": grasp.reason, "place": place.reason})
+                obj.scale, name, {"grasp": grasp.reason, "place": place.reason},
+                taught="teacher" if poses.T_obj_tcp is None and poses.T_fixture_obj is None else "file")
     return demo, "kept"
 
 

@@ -37,6 +37,8 @@ class Demo:
     scale: float
     name: str = ""
     verdicts: dict = field(default_factory=dict)
+    object: str = ""  # an imported object's library name ("": the procedural category-seed)
+    taught: str = "teacher"  # who set the poses: "teacher" (scripted), "file" (a poses file) or "page" (nift teach --web)
 
     def grasp_anchor(self) -> np.ndarray:
         """The gripper's pose in the cloud's frame (for the grasp template)."""
@@ -51,7 +53,7 @@ def save_demo(demo: Demo, path: str | Path) -> Path:
     """Write a demo atomically."""
     header = {"format": FORMAT, "task": demo.task, "category": demo.category, "seed": demo.seed,
               "scale": demo.scale, "name": demo.name, "intrinsics": demo.intrinsics, "verdicts": demo.verdicts,
-              **{k: np.asarray(getattr(demo, k)).tolist() for k in POSES}}
+              "object": demo.object, "taught": demo.taught, **{k: np.asarray(getattr(demo, k)).tolist() for k in POSES}}
     return write_npz(path, {"cloud": np.asarray(demo.cloud, dtype=np.float32)}, header)
 
 
@@ -65,6 +67,7 @@ def load_demo(path: str | Path) -> Demo:
         poses = {k: np.array(header[k], dtype=np.float64).reshape(4, 4) for k in POSES}
         return Demo(header["task"], cloud, category=header["category"], seed=int(header["seed"]),
                     scale=float(header["scale"]), name=header.get("name", ""), intrinsics=header["intrinsics"],
-                    verdicts=header.get("verdicts", {}), **poses)
+                    verdicts=header.get("verdicts", {}), object=str(header.get("object", "")),
+                    taught=str(header.get("taught", "teacher")), **poses)
     except (KeyError, ValueError, TypeError) as exc:
         raise ValueError(f"{path}: demo header is incomplete ({exc})") from None

@@ -209,6 +209,15 @@ class NetArm(_NetDevice, Arm):
     def unlockProtectiveStop(self) -> None:
         self._call("unlockProtectiveStop")
 
+    def teachMode(self) -> bool:
+        return bool(self._call("teachMode"))
+
+    def endTeachMode(self) -> bool:
+        return bool(self._call("endTeachMode"))
+
+    def isTeachMode(self) -> bool:
+        return bool(self._call("isTeachMode"))
+
     def getLastError(self) -> str:
         note = getattr(self._client, "note", "")
         return note or str(self._call("getLastError"))

@@ -50,6 +50,7 @@ class SimArm(Arm):
         self._last_error = ""
         self._moving = False  # a motion's control loop is running (stopJ from another thread then asks it to stop)
         self._stop_request: float | None = None  # the deceleration stopJ asked for, until the loop has stopped
+        self._teach = False  # freedrive (teachMode): the simulated operator's hand moves the arm (`guide`)
         self.max_tracking_error = 0.0  # rad, largest joint error during the last motion
         k = robot.kinematics
         self._limits = JointLimits(k.lower.copy(), k.upper.copy(), k.velocity_limit.copy(),
@@ -98,6 +99,35 @@ class SimArm(Arm):
     def getLastError(self) -> str:
         return self._last_error
 
+    # freedrive -------------------------------------------------------------------------------
+    def teachMode(self) -> bool:
+        self.require_connected()
+        if self._stopped:
+            raise ProtectiveStopError("arm is in a protective stop; call unlockProtectiveStop() first")
+        self._teach = True
+        return True
+
+    def endTeachMode(self) -> bool:
+        self.require_connected()
+        if self._teach:
+            self._teach = False
+            q = self.robot.arm_state()[0]
+            self.robot.command_arm(q, np.zeros(6))  # hold where the hand left it
+        return True
+
+    def isTeachMode(self) -> bool:
+        return self._teach
+
+    def guide(self, q: np.ndarray) -> None:
+        """The simulated operator's hand puts the arm at q (freedrive only; a real arm is pushed, not called)."""
+        self.require_connected()
+        if not self._teach:
+            raise RuntimeError("the arm can be guided by hand only in teach mode; call teachMode() first")
+        q = np.asarray(q, dtype=np.float64)
+        if q.shape != (6,) or not np.isfinite(q).all() or not self._limits.contains(q):
+            raise ValueError(f"guide needs 6 finite joint positions within the limits, got {q}")
+        self.robot.reset_arm(q)
+
     # motion ----------------------------------------------------------------------------------
     def moveJ(self, q: np.ndarray, speed: float = 1.05, acceleration: float = 1.4) -> bool:
         self._before_motion()
@@ -122,7 +152,7 @@ class SimArm(Arm):
         dt = self.robot.world.config.time_step
 
         def target(t: float):
-            s = profile.at_time(t)[0][0] / s_len
+            s = float(np.clip(profile.at_time(t)[0][0] / s_len, 0.0, 1.0))  # Ruckig may overshoot by ~1e-12
             q = k.ik(interpolate_pose(T0, T1, s), q_prev[0])
             if q is None or np.abs(q - q_prev[0]).max() > 4 * self._limits.velocity.max() * dt + 1e-3:
                 raise _NoIK(f"moveL: no continuous IK solution at {100 * s:.0f}% of the line")
@@ -171,6 +201,8 @@ class SimArm(Arm):
         self.require_connected()
         if self._stopped:
             raise ProtectiveStopError("arm is in a protective stop; call unlockProtectiveStop() first")
+        if self._teach:
+            raise RuntimeError("arm is in teach mode (freedrive); call endTeachMode() before a motion")
         self._last_error = ""
 
     def _track(self, target, duration: float) -> bool:
