@@ -27,6 +27,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="camera calibration file; if missing, the cell is calibrated first and it is written")
     p.add_argument("--seed", type=int, default=0, help="which train-split instances are used, and their poses")
     p.add_argument("--json", action="store_true", help="print what was recorded as JSON")
+    web = p.add_argument_group("the teach page (--web)")
+    web.add_argument("--web", action="store_true", help="teach by hand in the browser: freedrive, grasp, place, save")
+    web.add_argument("--host", default="127.0.0.1", help="address the page is served on (default 127.0.0.1: this "
+                     "machine only; the page has no password)")
+    web.add_argument("--port", type=int, default=8080, help="its port (default 8080)")
+    web.add_argument("--object", metavar="NAME", help="teach on an imported object (nift objects import) instead of "
+                     "procedural ones")
     add_config_argument(p)
 
 
@@ -46,6 +53,44 @@ def read_poses(path: Path):
         raise ValueError(f"{path}: expected JSON with instance, T_obj_tcp and T_fixture_obj ({exc})") from None
 
 
+def web(args: argparse.Namespace, t, out: Path) -> int:
+    """`nift teach --web`: the teach page on the live simulated cell until Ctrl-C."""
+    import time
+
+    from app.io_utils import writable_directory
+    from app.objects.library import load_object
+    from app.sim.calibration import ensure_calibration
+    from app.sim.cell import SimCell
+    from app.teach.page import TeachPage
+    from app.teach.session import TeachSession
+
+    if not args.web:
+        raise ValueError("--object teaches by hand: add --web (the scripted teacher needs procedural objects)")
+    if args.poses or args.rebuild or args.replace:
+        raise ValueError("--web records demos one at a time on the page; leave out --poses, --rebuild and --replace")
+    if not 1 <= args.port <= 65535:
+        raise ValueError(f"--port must be 1-65535, got {args.port}")
+    writable_directory(out, "--out")
+    source = load_object(args.object) if args.object else None
+    if source is not None and source.category != t.category:
+        raise ValueError(f"--object {args.object} is a {source.category}; the {t.name} task takes a {t.category}")
+    with SimCell(cell_config(args)) as cell:
+        T_base_cam = ensure_calibration(cell, args.calibration)
+        session = TeachSession(cell, t, out, T_base_cam, source, args.seed)
+        page = TeachPage(session, args.host, args.port)
+        where = "" if args.host in ("127.0.0.1", "localhost", "::1") else " (reachable from the network, no password)"
+        print(f"teach page for {t.name} on {page.url}{where}; demos go to {out}; Ctrl-C stops", flush=True)
+        try:
+            while True:
+                time.sleep(1.0)
+        except KeyboardInterrupt:
+            print("teach page stopped")
+        finally:
+            page.stop()
+            session.close()
+    return 0
+
+
 def run(args: argparse.Namespace) -> int:
     import numpy as np
 
@@ -57,6 +102,8 @@ def run(args: argparse.Namespace) -> int:
 
     t = task(args.task)
     out = args.out or DEMOS_DIR / t.name
+    if args.web or args.object:
+        return web(args, t, out)
     log = (lambda line: print(line, file=sys.stderr)) if args.json else print
     recorded = []
     if args.rebuild:

@@ -123,7 +123,11 @@ class TeachSession:
         """Clear the cell, put an object down (`which` split, or the imported one), capture its cloud."""
         with self.lock:
             self._clear()
-            seed = int(self.rng.choice(split(self.task.category, which))) if instance is None else int(instance)
+            seeds = split(self.task.category, which)
+            if instance is not None and self.source is None and instance not in seeds:
+                raise ValueError(f"instance {instance} is not a {which}ing {self.task.category} "
+                                 f"({seeds[0]}-{seeds[-1]})")
+            seed = int(self.rng.choice(seeds)) if instance is None else int(instance)
             obj = spawn(self.cell.world, self.task.category, seed, "upright", rng=self.rng, source=self.source)
             try:
                 cloud = object_cloud(self.cell.camera.capture(), self.T_base_cam)
