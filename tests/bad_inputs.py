@@ -87,6 +87,10 @@ CORPUS: list[tuple[tuple[str, ...], str]] = [
     (("teach", "--task", "mug", "--out", "afile"), "afile"),
     (("teach", "--task", "mug", "--out", "new", "--poses", "poses.json"), "poses.json"),
     (("teach", "--task", "mug", "--out", "new", "--poses", "missing.json"), "missing.json"),
+    (("teach", "--task", "mug", "--web", "--port", "70000"), "--port"),
+    (("teach", "--task", "mug", "--web", "--object", "nosuch"), "nosuch"),
+    (("teach", "--task", "mug", "--object", "nosuch"), "--web"),
+    (("teach", "--task", "mug", "--web", "--poses", "poses.json"), "--poses"),
     # bench, bench-jobs, the other benches
     (("bench", "--trials", "0"), "--trials"),
     (("bench", "--out", "afile"), "afile"),

@@ -29,7 +29,7 @@ FLOORS = {  # module prefix -> floor; the longest matching prefix decides
     "app.predict": 8, "app.motion": 8,
     "app.jobs": 9, "app.training": 9,
     "app.sim": 10,
-    "app.bench": 11, "app.console": 11,
+    "app.bench": 11, "app.console": 11, "app.teach": 11,
     "app.commands": 12,
     "app.cli": 13,
 }

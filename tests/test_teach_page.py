@@ -97,3 +97,56 @@ def test_a_demo_taught_in_the_browser_is_saved_rebuilds_the_templates_and_is_imi
 
     assert np.abs(rim(grasp) - rim(demo.T_base_tcp)).max() < 0.015  # its one demo's grasp, found again
     assert {p: p.stat().st_mtime_ns for p in out.glob("*.nit.npz")} == stamps  # read, not rebuilt
+
+
+def test_teaching_on_an_imported_scan_saves_a_demo_that_names_it(tmp_path):
+    """A scan-like mug imported from a file is taught by hand (poses an operator who knows the mug
+    would choose: those of the procedural mug the scan was made from) and the demo names it."""
+    from app.objects import generate
+    from app.objects.library import import_object
+    from app.tasks.task import teacher_grasp, teacher_place
+    from app.teach.session import TeachSession
+    from scan_meshes import scan_like
+
+    original = generate("mug", 3)
+    path = scan_like(original, tmp_path / "mug.obj", faces=8000)
+    source, _ = import_object(path, "mug", "my-mug", directory=tmp_path / "lib", faces=600)
+    with SimCell(CellConfig()) as cell:
+        session = TeachSession(cell, task("mug"), tmp_path / "mug", np.array(cell.camera.config.T_base_cam), source)
+        try:
+            assert session.new_object().ok and session.current.obj.label == "my-mug"
+            grasp = session.current.T_base_obj @ teacher_grasp(original)
+            steps = [session.guide(grasp), session.close_gripper()]
+            place = session.T_base_fixture @ teacher_place(task("mug"), original, 1.0)
+            steps += [session.guide(place @ np.linalg.inv(session.current.T_tcp_obj)), session.release()]
+            assert all(s.ok for s in steps), steps
+            assert session.save_demo().ok
+        finally:
+            session.close()
+    demo = load_demo(tmp_path / "mug" / "demo-00.npz")
+    assert demo.object == "my-mug" and demo.taught == "page" and demo.scale == 1.0
+
+
+def test_nift_teach_web_serves_the_page_and_stops_on_interrupt(tmp_path):
+    """`nift teach --web` as a user starts it: the page answers HTTP on loopback; Ctrl-C ends it cleanly."""
+    import signal
+    import time
+    import urllib.request
+
+    port = free_port()
+    proc = subprocess.Popen([sys.executable, "-m", "app.cli", "teach", "--task", "bowl", "--web", "--port", str(port),
+                             "--out", str(tmp_path / "bowl"), "--calibration", str(tmp_path / "cal.json")],
+                            cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        deadline, html = time.monotonic() + 240, ""
+        while time.monotonic() < deadline and not html:
+            try:
+                html = urllib.request.urlopen(f"http://127.0.0.1:{port}", timeout=2).read().decode()
+            except OSError:
+                time.sleep(1)
+        assert "<html" in html.lower() and proc.poll() is None
+    finally:
+        proc.send_signal(signal.SIGINT)
+        out, err = proc.communicate(timeout=60)
+    assert proc.returncode == 0, err
+    assert f"teach page for bowl on http://127.0.0.1:{port}" in out and "stopped" in out
