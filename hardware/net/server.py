@@ -31,6 +31,7 @@ from hardware.net.verbs import Service
 
 LOG = logging.getLogger("nift.net")
 BUILTIN = ("hello", "result", "release", "setWatchdog", "kickWatchdog")
+DRAIN = 64  # requests answered in a row before the watchdog looks again
 KEPT_RESULTS = 256  # finished jobs remembered for their "result" poll
 MAX_WAIT = 0.02  # s a "result" poll may wait for its job: it answers the moment the job ends, and other
 # requests (stopJ, state reads) wait at most this long behind it
@@ -140,8 +141,18 @@ class DeviceServer:
         poller.register(self._socket, zmq.POLLIN)
         while not self._stop.is_set():
             if poller.poll(poll_ms):
-                self._answer(self._socket.recv_multipart())
+                self._drain()
             self._watch()
+
+    def _drain(self, most: int = DRAIN) -> None:
+        """Answer the requests waiting (at most `most`) before the watchdog looks: a client whose
+        messages queued while this server was busy has not been silent."""
+        for _ in range(most):
+            try:
+                frames = self._socket.recv_multipart(zmq.NOBLOCK)
+            except zmq.Again:
+                return
+            self._answer(frames)
 
     # one request -------------------------------------------------------------------------------
     def _answer(self, frames: list[bytes]) -> None:
