@@ -28,6 +28,11 @@ def atomic_path(path: str | Path) -> Iterator[Path]:
             tmp_path.unlink()
 
 
+def cache_root() -> Path:
+    """Where generated files are cached: $NIFT_CACHE or ~/.cache/nift-cell."""
+    return Path(os.environ.get("NIFT_CACHE") or Path.home() / ".cache" / "nift-cell")
+
+
 def writable_directory(path: str | Path, what: str) -> Path:
     """`path` if it is, or could be made, a directory this process can write; a one-line error if not."""
     path = Path(path)

@@ -62,6 +62,7 @@ CORPUS: list[tuple[tuple[str, ...], str]] = [
     (("objects", "import", "missing.obj", "--category", "mug"), "missing.obj"),
     (("objects", "import", "mug-mm.stl", "--category", "mug", "--units", "m"), "--units"),
     (("objects", "import", "sheet.stl", "--category", "mug"), "sheet.stl"),
+    (("objects", "import", "fin.stl", "--category", "mug"), "fin.stl"),
     (("objects", "import", "mug-mm.stl", "--category", "mug", "--name", "My Mug"), "My Mug"),
     (("objects", "import", "mug-mm.stl", "--category", "teapot"), "--category"),
     (("objects", "import", "mug-mm.stl", "--category", "mug", "--collision-faces", "5"), "--collision-faces"),
@@ -140,6 +141,9 @@ def make_inputs(root: Path) -> None:
     (root / "notamesh.obj").write_text("v 0 0 zero\nthis is not a mesh\n")
     sheet = trimesh.Trimesh([[0, 0, 0], [0.1, 0, 0], [0.1, 0.1, 0], [0, 0.1, 0]], [[0, 1, 2], [0, 2, 3]])
     sheet.export(root / "sheet.stl")
+    fin = trimesh.Trimesh([[0, 0, 0], [0, 0, 0.1], [0.1, 0, 0.05], [0, 0.1, 0.05], [-0.1, -0.05, 0.05]],
+                          [[0, 1, 2], [0, 1, 3], [0, 1, 4]], process=False)  # three faces on one edge: non-manifold
+    fin.export(root / "fin.stl")
     mug = generate("mug", 1)
     mug.apply_scale(1000.0)  # millimetres: as metres, 100 m across
     mug.export(root / "mug-mm.stl")

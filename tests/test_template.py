@@ -122,3 +122,25 @@ def test_a_template_header_without_its_anchor_is_named(tmp_path):
     write_npz(tmp_path / "t.nit.npz", arrays, header)
     with pytest.raises(ValueError, match="lacks anchor"):
         load_template(tmp_path / "t.nit.npz")
+
+
+def test_templates_the_project_does_not_ship_are_built_in_the_cache_not_in_demos(tmp_path, monkeypatch):
+    """A baseline's templates for the shipped demos go to $NIFT_CACHE/templates/<task>-<digest of the
+    demos>/, are read from there the next time, and nothing is written into demos/."""
+    import time
+
+    from app.tasks.library import DEMOS_DIR, built_elsewhere, task_templates
+    from app.tasks.task import task
+
+    monkeypatch.setenv("NIFT_CACHE", str(tmp_path))
+    before = sorted(p.name for p in (DEMOS_DIR / "bowl").iterdir())
+    first = task_templates(task("bowl"), query="bps", feature="scf")
+    where = built_elsewhere(DEMOS_DIR / "bowl")
+    assert where.parent == tmp_path / "templates" and sorted(p.name for p in where.iterdir()) == [
+        "grasp-bps-scf.nit.npz", "place-bps-scf.nit.npz"]
+    assert sorted(p.name for p in (DEMOS_DIR / "bowl").iterdir()) == before
+    stamps = {p: p.stat().st_mtime_ns for p in where.iterdir()}
+    time.sleep(0.01)
+    again = task_templates(task("bowl"), query="bps", feature="scf")
+    assert {p: p.stat().st_mtime_ns for p in where.iterdir()} == stamps  # read, not rebuilt
+    assert np.allclose(first["grasp"].features, again["grasp"].features)

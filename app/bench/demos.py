@@ -1,9 +1,8 @@
 """The demos a benchmark run imitates.
 
 The recorded ones (`demos/<task>/`, or `--demo-dir`'s, seen by the cell's Kinect) when the run uses
-all ten and the single camera and, in the project's own `demos/`, every template it needs is there
-(the run never writes into the project). Otherwise a copy in `<out>/demos/<task>/`: the first
-`--demos N` of them, and with
+all ten and the single camera. Otherwise a copy in `<out>/demos/<task>/`: the first `--demos N` of
+them, and with
 `--camera fused` each demo's cloud ray cast again from the four fused cameras at the demo object's
 recorded pose - in the paper's simulated setting demos and test objects are both seen fused, so a
 template built from single-view demo clouds would compare unlike with unlike. The copies are made
@@ -34,13 +33,11 @@ def seen_by(demo: Demo, camera: str, cell: CellConfig, seed: int) -> Demo:
     return dataclasses.replace(demo, cloud=cloud)
 
 
-def bench_demos(config: BenchConfig, out: Path, templates: list[str] = ()) -> Path:
-    """The directory whose `<task>/` folders hold the run's demos (made on first use); `templates`:
-    the template file names the run reads in each."""
+def bench_demos(config: BenchConfig, out: Path) -> Path:
+    """The directory whose `<task>/` folders hold the run's demos (made on first use)."""
     source = Path(config.demo_dir) if config.demo_dir else DEMOS_DIR
     folders = sorted({task(t).demos for t in config.tasks})
-    shipped = all((source / name / f).is_file() for name in folders for f in templates)
-    if config.demos == 10 and config.camera == "single" and (source != DEMOS_DIR or shipped):
+    if config.demos == 10 and config.camera == "single":
         return source
     root = out / "demos"
     for name in folders:

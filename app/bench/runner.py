@@ -22,7 +22,7 @@ from app.bench.protocol import BenchConfig, Trial, trials
 from app.io_utils import write_json
 from app.nift.template import weights_id
 from app.predict.methods import ORACLE, check_method
-from app.tasks.library import STAGES, task_templates, template_path
+from app.tasks.library import task_templates
 from app.tasks.task import task
 
 FORMAT = "nift-bench/1"
@@ -59,7 +59,7 @@ def prepare(config: BenchConfig, out: Path) -> Path:
                              f"ask for at least that many or choose another --out")
     # more trials than before extend the run: a trial's seed depends on its index alone (protocol.py)
     write_json(run_file, wanted)
-    root = bench_demos(config, out, template_files(config))
+    root = bench_demos(config, out)
     for name in config.tasks:
         t = task(name)
         for method in config.methods:
@@ -67,16 +67,6 @@ def prepare(config: BenchConfig, out: Path) -> Path:
                 query, feature = check_method(method).split("-")
                 task_templates(t, root / t.demos, query, feature, nif=config.fields)
     return root
-
-
-def template_files(config: BenchConfig) -> list[str]:
-    """Names of the template files the run's template methods read in each task folder."""
-    names = []
-    for method in config.methods:
-        if method not in (ORACLE, "cpd"):
-            query, feature = check_method(method).split("-")
-            names += [template_path(Path(), s, query, feature, config.fields).name for s in STAGES]
-    return names
 
 
 def read_rows(out: Path) -> list[dict]:

@@ -8,14 +8,13 @@ file as a compound of convex hulls.
 from __future__ import annotations
 
 import hashlib
-import os
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 import trimesh
 
-from app.io_utils import atomic_path
+from app.io_utils import atomic_path, cache_root
 
 
 @dataclass(frozen=True)
@@ -32,8 +31,7 @@ class DecompositionConfig:
 
 def cache_dir() -> Path:
     """Where collision models are cached: $NIFT_CACHE/collision or ~/.cache/nift-cell/collision."""
-    root = os.environ.get("NIFT_CACHE") or Path.home() / ".cache" / "nift-cell"
-    return Path(root) / "collision"
+    return cache_root() / "collision"
 
 
 def _key(mesh: trimesh.Trimesh, config: DecompositionConfig) -> str:

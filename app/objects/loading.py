@@ -21,6 +21,7 @@ UNITS = {"m": 1.0, "cm": 0.01, "mm": 0.001, "in": 0.0254}
 UP_AXES = ("z", "y", "x", "-z", "-y", "-x")
 SIZE_RANGE = (0.02, 0.6)  # m: the largest extent a graspable object can have in this cell
 KEPT_VOLUME = 0.05  # MeshFix keeps the largest component: less than this share of the hull is a failure
+KEPT_EXTENT = 0.9  # nor may the repair shrink the object along an axis by more than this share
 FOOTPRINT = 0.005  # m (after scaling): the slice above the lowest point whose hull is the footprint
 
 
@@ -91,10 +92,18 @@ def _meshfix(mesh: trimesh.Trimesh, name: str) -> trimesh.Trimesh:
     fix.repair(remove_smallest_components=False)
     points, faces = np.asarray(fix.points), np.asarray(fix.faces)
     out = trimesh.Trimesh(points, faces, process=True) if len(faces) else None
-    if out is None or not out.is_watertight or out.volume < KEPT_VOLUME * abs(mesh.convex_hull.volume):
-        raise ValueError(f"{name}: not a closed surface and MeshFix could not repair it "
-                         f"({open_edges(mesh)} open edges); close it in a mesh editor")
+    kept = out is not None and out.is_watertight and out.volume >= KEPT_VOLUME * abs(mesh.convex_hull.volume)
+    if not kept or (out.extents < KEPT_EXTENT * mesh.extents).any():  # MeshFix dropped a part of it
+        raise ValueError(f"{name}: not a closed manifold surface ({open_edges(mesh)} open edges, "
+                         f"{shared_edges(mesh)} edges shared by more than two faces) and MeshFix could not "
+                         f"repair it; close it in a mesh editor")
     return out
+
+
+def shared_edges(mesh: trimesh.Trimesh) -> int:
+    """Edges used by more than two faces (non-manifold)."""
+    _, counts = np.unique(mesh.edges_sorted, axis=0, return_counts=True)
+    return int((counts > 2).sum())
 
 
 def metres_per_unit(extent: float, units: str | None, name: str = "mesh") -> tuple[float, str]:

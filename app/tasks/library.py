@@ -3,12 +3,15 @@
 Layout of a task's directory (`demos/<task>/`): demo-NN.npz (nift-demo/1), and
 {grasp,place}-<query>-<feature>.nit.npz (nift-nit/1) - the shipped ones are ibs-nif, NIFT's own.
 Templates are rebuilt from the demos when missing, stale, or built with other field weights.
+Those the project does not ship (the baselines') are built in the user's cache, never in `demos/`.
 """
 from __future__ import annotations
 
+import hashlib
 from functools import lru_cache
 from pathlib import Path
 
+from app.io_utils import cache_root
 from app.nift.template import (StaleTemplate, Template, build_template, field_id, field_override, load_template,
                                save_template, with_demo_features)
 from app.tasks.anchors import anchor_mesh
@@ -76,6 +79,22 @@ def _with_demo_features(path: Path, stamp: int, directory: Path, stage: str, wei
     return with_demo_features(load_template(path, weights), template_frames(task_demos(directory), stage), weights)
 
 
+def shipped(directory: Path) -> bool:
+    """Whether a task directory is one of the project's own (`demos/<task>/`), which runs only read."""
+    directory = Path(directory).resolve()
+    return directory.parent == DEMOS_DIR.resolve() and not directory.name.startswith(".")
+
+
+def built_elsewhere(directory: Path) -> Path:
+    """Where templates the project does not ship are built for its demos: the user's cache, under
+    the digest of the demo files (new demos, new folder)."""
+    digest = hashlib.sha1()
+    for path in sorted(Path(directory).glob(DEMO_GLOB)):
+        digest.update(path.name.encode())
+        digest.update(path.read_bytes())
+    return cache_root() / "templates" / f"{Path(directory).name}-{digest.hexdigest()[:12]}"
+
+
 def task_templates(t: Task, directory: Path | None = None, query: str = "ibs", feature: str = "nif",
                    rebuild: bool = False, nif: str | Path | None = None,
                    per_demo: tuple[str, ...] = ()) -> dict[str, Template]:
@@ -85,6 +104,8 @@ def task_templates(t: Task, directory: Path | None = None, query: str = "ibs", f
     directory = directory or DEMOS_DIR / t.demos
     weights = field_override(feature, nif)
     paths = {s: template_path(directory, s, query, feature, nif) for s in STAGES}
+    if not rebuild and not all(p.is_file() for p in paths.values()) and shipped(directory):
+        paths = {s: template_path(built_elsewhere(directory), s, query, feature, nif) for s in STAGES}
     if not rebuild and all(p.is_file() for p in paths.values()):
         try:
             templates = {s: load_template(p, weights) for s, p in paths.items()}
