@@ -98,6 +98,14 @@ def test_a_demo_taught_in_the_browser_is_saved_rebuilds_the_templates_and_is_imi
     assert np.abs(rim(grasp) - rim(demo.T_base_tcp)).max() < 0.015  # its one demo's grasp, found again
     assert {p: p.stat().st_mtime_ns for p in out.glob("*.nit.npz")} == stamps  # read, not rebuilt
 
+    # the list: shown again, tried on an unseen object, deleted (templates go with the last demo)
+    assert page.press("Show demo").startswith("demo-00: bowl 7, taught by page")
+    tried = page.press("Imitate on an unseen object")
+    assert "predicted grasp and place (template loss grasp" in tried, tried
+    assert page.page.session.current.obj.seed >= 100_000  # a test-split instance, never a demo's
+    assert page.press("Delete demo").startswith("deleted demo-00; 0 demos left")
+    assert sorted(p.name for p in out.iterdir()) == []
+
 
 def test_teaching_on_an_imported_scan_saves_a_demo_that_names_it(tmp_path):
     """A scan-like mug imported from a file is taught by hand (poses an operator who knows the mug
