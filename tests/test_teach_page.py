@@ -158,3 +158,33 @@ def test_nift_teach_web_serves_the_page_and_stops_on_interrupt(tmp_path):
         out, err = proc.communicate(timeout=60)
     assert proc.returncode == 0, err
     assert f"teach page for bowl on http://127.0.0.1:{port}" in out and "stopped" in out
+
+
+def test_dragging_the_gizmo_moves_the_arm_or_marks_the_pose_red_and_says_why(tmp_path):
+    """The gizmo's handler as the page calls it on a drag: a reachable pose moves the arm there; one
+    out of reach leaves the arm, draws the red gripper and puts the reason on the status line."""
+    from app.teach.page import TeachPage
+    from app.teach.session import TeachSession
+    from app.teach.view import wxyz
+
+    with SimCell(CellConfig()) as cell:
+        session = TeachSession(cell, task("bowl"), tmp_path / "bowl", np.array(cell.camera.config.T_base_cam))
+        page = TeachPage(session, "127.0.0.1", free_port())
+        try:
+            session.cell.arm.teachMode()
+            start = session.tcp()
+            near = start.copy()
+            near[:3, 3] += [0.05, -0.03, -0.04]
+            page.view.gizmo.position, page.view.gizmo.wxyz = near[:3, 3], wxyz(near)
+            page._dragged(page.view.gizmo)
+            assert np.allclose(session.tcp(), near, atol=1e-4) and page.view.ghost is None
+            q = session.q()
+            far = near.copy()
+            far[:3, 3] = [2.0, 0.0, 0.3]  # beyond the UR5's reach
+            page.view.gizmo.position = far[:3, 3]
+            page._dragged(page.view.gizmo)
+            assert np.allclose(session.q(), q) and page.view.ghost is not None
+            assert "Cannot go there: no IK solution for the TCP at [2.0, 0.0, 0.3] (out of reach)" in page.status.content
+        finally:
+            page.stop()
+            session.close()
