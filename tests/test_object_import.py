@@ -98,7 +98,8 @@ def test_import_round_trips_through_the_library_and_a_failure_writes_nothing(imp
     trimesh.Trimesh([[0, 0, 0], [0.1, 0, 0], [0.1, 0.1, 0]], [[0, 1, 2]]).export(sheet)
     with pytest.raises(ValueError, match="could not repair"):
         import_object(sheet, "mug", "sheet", directory=tmp_path)
-    assert object_names(tmp_path) == ["scan-mug"] and sorted(p.name for p in tmp_path.iterdir()) == ["scan-mug", "sheet.stl"]
+    assert object_names(tmp_path) == ["scan-mug"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["scan-mug", "sheet.stl"]
     with pytest.raises(ValueError, match="unknown object 'nosuch'.*scan-mug"):
         load_object("nosuch", tmp_path)
 

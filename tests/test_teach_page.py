@@ -184,7 +184,8 @@ def test_dragging_the_gizmo_moves_the_arm_or_marks_the_pose_red_and_says_why(tmp
             page.view.gizmo.position = far[:3, 3]
             page._dragged(page.view.gizmo)
             assert np.allclose(session.q(), q) and page.view.ghost is not None
-            assert "Cannot go there: no IK solution for the TCP at [2.0, 0.0, 0.3] (out of reach)" in page.status.content
+            why = "Cannot go there: no IK solution for the TCP at [2.0, 0.0, 0.3] (out of reach)"
+            assert why in page.status.content
         finally:
             page.stop()
             session.close()

@@ -72,7 +72,7 @@ class TeachPage:
             self.instance = gui.add_text("Instance", "", hint="which training instance (a number); blank: a random one")
             self._button("New object", lambda: self.session.new_object(instance=self._instance()))
         with gui.add_folder("2. Freedrive"):
-            self.tcp_text = gui.add_text("TCP pose", "", hint="x y z rx ry rz in the base frame (m, rad); or drag the gizmo")
+            self.tcp_text = gui.add_text("TCP pose", "", hint="x y z rx ry rz, base frame (m, rad); or drag the gizmo")
             self._button("Move TCP", lambda: self.session.guide(parse_pose(self.tcp_text.value, "TCP pose")))
         with gui.add_folder("3. Grasp"):
             self._button("Close gripper", lambda: self.session.close_gripper())

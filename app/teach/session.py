@@ -216,7 +216,8 @@ class TeachSession:
             demo = self._demo(taught, grasp)
             with staged(self.out, "add") as stage:
                 save_demo(demo, stage / f"{demo.name}.npz")
-                progress(0.3, f"rebuilding the {self.task.name} templates from {len(list(stage.glob(DEMO_GLOB)))} demos")
+                count = len(list(stage.glob(DEMO_GLOB)))
+                progress(0.3, f"rebuilding the {self.task.name} templates from {count} demos")
                 templates = task_templates(self.task, stage, rebuild=True)
             progress(1.0, "saved")
             sizes = ", ".join(f"{s} {len(tp.points)} points" for s, tp in templates.items())

@@ -101,8 +101,9 @@ class CellView:
             self.ghost = None
         if ok is False and T_base_tcp is not None:
             mesh = gripper_mesh()
-            self.ghost = self.server.scene.add_mesh_simple("/tcp_refused", mesh.vertices, mesh.faces, color=BAD_COLOUR,
-                                                           opacity=0.6, position=T_base_tcp[:3, 3], wxyz=wxyz(T_base_tcp))
+            self.ghost = self.server.scene.add_mesh_simple(
+                "/tcp_refused", mesh.vertices, mesh.faces, color=BAD_COLOUR, opacity=0.6,
+                position=T_base_tcp[:3, 3], wxyz=wxyz(T_base_tcp))
 
     def _object(self) -> None:
         s, scene = self.session, self.server.scene
@@ -129,7 +130,8 @@ class CellView:
         gripper = gripper_mesh()
         T_place_obj = pred.motion @ current.T_base_obj
         T_place_tcp = pred.motion @ pred.T_base_tcp
-        for name, T, mesh in (("/predicted/grasp", pred.T_base_tcp, gripper), ("/predicted/place_gripper", T_place_tcp, gripper),
+        for name, T, mesh in (("/predicted/grasp", pred.T_base_tcp, gripper),
+                              ("/predicted/place_gripper", T_place_tcp, gripper),
                               ("/predicted/place_object", T_place_obj, current.obj.mesh)):
             self.ghosts.append(scene.add_mesh_simple(name, mesh.vertices, mesh.faces, color=GHOST_COLOUR, opacity=0.45,
                                                      position=T[:3, 3], wxyz=wxyz(T)))
