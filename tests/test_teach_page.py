@@ -63,7 +63,12 @@ def test_a_demo_taught_in_the_browser_is_saved_rebuilds_the_templates_and_is_imi
     assert page.press("Save demo").startswith("Not done: no grasp to save")
     page.type("Instance", "banana")
     assert page.press("New object").startswith("Not done: Instance: give a whole number")
-    answers = page.teach_one(instance=7, save=False)
+    page.type("Instance", "")
+    page.type("Put at", "0.5 zero 0.3")
+    assert page.press("New object").startswith("Not done: Put at: give x y yaw")
+    answers = page.teach_one(instance=7, save=False, at="0.52 0.02 0.3")
+    T_obj = page.page.session.current.T_base_obj
+    assert np.allclose(T_obj[:2, 3], [0.52, 0.02], atol=0.005) and abs(np.arctan2(T_obj[1, 0], T_obj[0, 0]) - 0.3) < 0.02
     assert answers[0].startswith("bowl-7 on the table") and "held: detected and lifted" in answers[-3], answers
     assert answers[-1].startswith("placed"), answers
     shot = page.screenshot(tmp_path / "teach-page.png")

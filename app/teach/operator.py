@@ -103,7 +103,7 @@ class Operator:
             except StaleElementReferenceException:
                 time.sleep(0.2)
         handle = {"TCP pose": self.page.tcp_text, "Object pose": self.page.obj_text,
-                  "Instance": self.page.instance}[label]
+                  "Instance": self.page.instance, "Put at": self.page.placement}[label]
         deadline = time.monotonic() + 10.0
         while handle.value != text and time.monotonic() < deadline:  # the field's value travels over the websocket
             time.sleep(0.05)
@@ -123,12 +123,13 @@ class Operator:
             time.sleep(0.2)
 
     # one demo with the teacher's poses --------------------------------------------------------------
-    def teach_one(self, instance: int | None = None, save: bool = True) -> list[str]:
-        """Put an object down, grasp, carry and place it where the scripted teacher would, save;
-        the page's answers in order (an answer starting 'Not done' ends the demo)."""
+    def teach_one(self, instance: int | None = None, save: bool = True, at: str = "") -> list[str]:
+        """Put an object down (at `at`, 'x y yaw', if given), grasp, carry and place it where the
+        scripted teacher would, save; the page's answers in order (a 'Not done' ends the demo)."""
         session = self.page.session
         answers = []
         self.type("Instance", "" if instance is None else str(instance))
+        self.type("Put at", at)
         answers.append(self.press("New object"))
         obj, T_obj = session.current.obj, session.current.T_base_obj
         for turn in (np.eye(4), HALF_TURN):  # a careful operator turns the wrist when the arm cannot reach

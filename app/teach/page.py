@@ -70,7 +70,9 @@ class TeachPage:
         self.progress = gui.add_progress_bar(0.0, visible=False)
         with gui.add_folder("1. Object"):
             self.instance = gui.add_text("Instance", "", hint="which training instance (a number); blank: a random one")
-            self._button("New object", lambda: self.session.new_object(instance=self._instance()))
+            self.placement = gui.add_text("Put at", "", hint="x y yaw on the table (m, m, rad); blank: a random place")
+            self._button("New object", lambda: self.session.new_object(instance=self._instance(),
+                                                                         placement=self._placement()))
         with gui.add_folder("2. Freedrive"):
             self.tcp_text = gui.add_text("TCP pose", "", hint="x y z rx ry rz, base frame (m, rad); or drag the gizmo")
             self._button("Move TCP", lambda: self.session.guide(parse_pose(self.tcp_text.value, "TCP pose")))
@@ -152,6 +154,16 @@ class TeachPage:
         if not text.isdigit():
             raise ValueError(f"Instance: give a whole number or leave it blank, got {text!r}")
         return int(text)
+
+    def _placement(self) -> tuple[float, float, float] | None:
+        text = self.placement.value.replace(",", " ").split()
+        if not text:
+            return None
+        try:
+            x, y, yaw = (float(v) for v in text)
+        except ValueError:
+            raise ValueError(f"Put at: give x y yaw (m, m, rad) or leave it blank, got {' '.join(text)!r}") from None
+        return x, y, yaw
 
     # actions with more than one call -----------------------------------------------------------------
     def _move_object(self) -> Step:

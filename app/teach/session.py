@@ -42,7 +42,7 @@ from app.tasks.demo import DEMO_GLOB, Demo, load_demo, save_demo
 from app.tasks.library import task_templates
 from app.tasks.staging import staged
 from app.tasks.task import Task
-from hardware.se3 import invert, pose_to_ur, ur_to_pose
+from hardware.se3 import invert, make_pose, pose_to_ur, rotvec_to_matrix, ur_to_pose
 from hardware.sim.world import SimWorld, SimWorldConfig
 
 LIFT = 0.05  # m the lift check raises a closed gripper
@@ -119,8 +119,10 @@ class TeachSession:
         return load_demo(self.out / f"{name}.npz")
 
     # the operator's steps --------------------------------------------------------------------------
-    def new_object(self, which: str = "train", instance: int | None = None) -> Step:
-        """Clear the cell, put an object down (`which` split, or the imported one), capture its cloud."""
+    def new_object(self, which: str = "train", instance: int | None = None,
+                   placement: tuple[float, float, float] | None = None) -> Step:
+        """Clear the cell, put an object down (`which` split, or the imported one) upright at a random
+        place or at `placement` (x, y in metres, yaw in radians), capture its cloud."""
         with self.lock:
             self._clear()
             seeds = split(self.task.category, which)
@@ -128,7 +130,10 @@ class TeachSession:
                 raise ValueError(f"instance {instance} is not a {which}ing {self.task.category} "
                                  f"({seeds[0]}-{seeds[-1]})")
             seed = int(self.rng.choice(seeds)) if instance is None else int(instance)
-            obj = spawn(self.cell.world, self.task.category, seed, "upright", rng=self.rng, source=self.source)
+            at = None if placement is None else make_pose(rotvec_to_matrix([0.0, 0.0, placement[2]]),
+                                                          [placement[0], placement[1], 0.0])
+            obj = spawn(self.cell.world, self.task.category, seed, "upright", rng=self.rng, source=self.source,
+                        T_world_obj=at)
             try:
                 cloud = object_cloud(self.cell.camera.capture(), self.T_base_cam)
             except ValueError as exc:
