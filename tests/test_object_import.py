@@ -12,7 +12,7 @@ import pytest
 import trimesh
 
 from app.objects import generate
-from app.objects.library import check_name, import_object, load_object, object_names
+from app.objects.library import check_name, import_object, load_object, object_info, object_names
 from app.objects.loading import footprint_centre, open_edges, prepare_mesh, read_mesh, up_rotation
 from scan_meshes import scan_like
 
@@ -102,6 +102,9 @@ def test_import_round_trips_through_the_library_and_a_failure_writes_nothing(imp
     assert sorted(p.name for p in tmp_path.iterdir()) == ["scan-mug", "sheet.stl"]
     with pytest.raises(ValueError, match="unknown object 'nosuch'.*scan-mug"):
         load_object("nosuch", tmp_path)
+    with pytest.raises(ValueError, match="object 'scan-mug' is a mug, not a bowl"):
+        load_object("scan-mug", tmp_path, category="bowl")
+    assert object_info("scan-mug", tmp_path, category="mug")["units"] == "mm"
 
 
 def test_an_imported_mug_stands_on_the_table_and_the_teacher_refuses_it(imported):

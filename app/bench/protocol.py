@@ -103,9 +103,9 @@ class BenchConfig:
 
 def imported_category(name: str) -> str:
     """The category of a library object (a one-line error if there is none of that name)."""
-    from app.objects.library import load_object
+    from app.objects.library import object_info
 
-    return load_object(name).category
+    return object_info(name)["category"]
 
 
 @dataclass(frozen=True)

@@ -16,14 +16,14 @@ import numpy as np
 from app.bench.protocol import BenchConfig, Trial, trial_cloud
 from app.jobs.job import JobConfig
 from app.motion.scene import PlanningScene
+from app.objects.library import LibraryObject, load_object
 from app.predict.methods import ORACLE
 from app.predict.predict import predict
 from app.sim.cell import CellConfig, SimCell, add_fixtures
 from app.sim.jobs import JobSpec, run_sim_job, spawn_test_object
-from app.sim.judges import judge_grasp, judge_place
+from app.sim.judges import judge_grasp, judge_place, judged_copy
 from app.sim.oracle import teacher_prediction
-from app.objects.library import LibraryObject, load_object
-from app.sim.spawn import SpawnedObject, spawn
+from app.sim.spawn import SpawnedObject
 from app.tasks.task import task
 from hardware.gripper_geometry import lowest_point
 from hardware.sim.world import SimWorld, SimWorldConfig
@@ -87,25 +87,16 @@ class TeleportedBench:
                              "gripper_in_table": False, "why": f"no prediction: {exc}", "seconds": round(time.perf_counter() - start, 2)})
                 continue
             seconds = time.perf_counter() - start
-            grasp = self.judge_copy(obj, T_base_obj, trial.pose,
-                                lambda o: judge_grasp(self.world, o, pred.T_base_tcp))
-            place = self.judge_copy(obj, T_base_obj, trial.pose,
+            grasp = judged_copy(self.world, obj, T_base_obj, lambda o: judge_grasp(self.world, o, pred.T_base_tcp),
+                                trial.pose)
+            place = judged_copy(self.world, obj, T_base_obj,
                                 lambda o: judge_place(self.world, o, pred.motion @ T_base_obj,
-                                                      self.fixtures[t.fixture], t.upright))
+                                                      self.fixtures[t.fixture], t.upright), trial.pose)
             rows.append({**base, "method": method, "grasp": grasp.success, "place": place.success,
                          "overall": grasp.success and place.success,
                          "gripper_in_table": lowest_point(pred.T_base_tcp) < -IN_TABLE,
                          "why": f"grasp: {grasp.reason}; place: {place.reason}", "seconds": round(seconds, 2)})
         return rows
-
-    def judge_copy(self, obj, T_base_obj, pose, judge):
-        """Run a judge on a fresh copy of the trial's object in the trial's pose."""
-        copy = spawn(self.world, obj.category, obj.seed, pose, scale=obj.scale, T_world_obj=T_base_obj,
-                     source=obj.source)
-        try:
-            return judge(copy)
-        finally:
-            self.world.remove(copy.body)
 
 
 class ExecutedBench:

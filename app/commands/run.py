@@ -51,9 +51,8 @@ def run(args: argparse.Namespace) -> int:
     source = imported(args.object, t, args.method) if args.object else None
     if source is not None and args.devices == "net":
         raise ValueError("--object needs the simulated cell in this process (--devices sim)")
-    args.source = source
     config = JobConfig(method=args.method, demos=args.demos, second_look=args.second_look)
-    results = _run_net(args, t, config) if args.devices == "net" else _run_sim(args, t, config)
+    results = _run_net(args, t, config) if args.devices == "net" else _run_sim(args, t, config, source)
     return _report(results, args, t)
 
 
@@ -62,17 +61,15 @@ def imported(name: str, t, method: str):
     from app.objects.library import load_object
     from app.predict.methods import ORACLE
 
-    source = load_object(name)
-    if source.category != t.category:
-        raise ValueError(f"--object {name} is a {source.category}; the {t.name} task takes a {t.category}")
+    source = load_object(name, category=t.category)
     if method == ORACLE:
         raise ValueError(f"--method {ORACLE} needs a procedural object's landmarks and {name!r} is imported; "
                          f"use a learned method")
     return source
 
 
-def _run_sim(args: argparse.Namespace, t, config) -> list:
-    """The jobs in the simulated cell in this process."""
+def _run_sim(args: argparse.Namespace, t, config, source=None) -> list:
+    """The jobs in the simulated cell in this process (on the imported object `source`, if given)."""
     from tqdm import tqdm
 
     from app.console.options import cell_config
@@ -81,7 +78,7 @@ def _run_sim(args: argparse.Namespace, t, config) -> list:
     from app.sim.cell import SimCell
     from app.sim.jobs import JobSpec, run_series
 
-    specs = [JobSpec(t, args.seed + i, args.pose, args.source) for i in range(args.jobs)]
+    specs = [JobSpec(t, args.seed + i, args.pose, source) for i in range(args.jobs)]
     cell_cfg = cell_config(args, gui=args.gui)
     bar = tqdm(total=len(specs), unit="job", desc=f"nift run {t.name}", disable=len(specs) == 1 or args.json)
     done = []

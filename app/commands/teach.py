@@ -71,9 +71,7 @@ def web(args: argparse.Namespace, t, out: Path) -> int:
     if not 1 <= args.port <= 65535:
         raise ValueError(f"--port must be 1-65535, got {args.port}")
     writable_directory(out, "--out")
-    source = load_object(args.object) if args.object else None
-    if source is not None and source.category != t.category:
-        raise ValueError(f"--object {args.object} is a {source.category}; the {t.name} task takes a {t.category}")
+    source = load_object(args.object, category=t.category) if args.object else None
     with SimCell(cell_config(args)) as cell:
         T_base_cam = ensure_calibration(cell, args.calibration)
         session = TeachSession(cell, t, out, T_base_cam, source, args.seed)

@@ -62,8 +62,9 @@ def object_names(directory: Path | None = None) -> list[str]:
     return sorted(p.parent.name for p in root.glob("*/object.json")) if root.is_dir() else []
 
 
-def load_object(name: str, directory: Path | None = None) -> LibraryObject:
-    """An imported object by name, or a one-line error listing those there are."""
+def object_info(name: str, directory: Path | None = None, category: str | None = None) -> dict:
+    """An imported object's record (object.json: its category, source, what the import did), of
+    `category` if given; a one-line error for an unknown name, a foreign file or another category."""
     root = directory or library_dir()
     folder = root / name
     if not (folder / "object.json").is_file():
@@ -72,13 +73,25 @@ def load_object(name: str, directory: Path | None = None) -> LibraryObject:
                          f"{', '.join(known) if known else 'none'} (import one with nift objects import)")
     try:
         info = json.loads((folder / "object.json").read_text())
-        if info.get("format") != FORMAT:
-            raise ValueError(f"format {info.get('format')!r}")
-        mesh = trimesh.load(folder / "mesh.obj", force="mesh", process=True)
-    except (ValueError, OSError, KeyError) as exc:
+        if info.get("format") != FORMAT or info.get("category") not in CATEGORIES:
+            raise ValueError(f"format {info.get('format')!r}, category {info.get('category')!r}")
+    except (ValueError, OSError, AttributeError) as exc:
         raise ValueError(f"{folder}: not a readable library object ({exc})") from None
+    if category is not None and info["category"] != category:
+        raise ValueError(f"object {name!r} is a {info['category']}, not a {category}")
+    return info
+
+
+def load_object(name: str, directory: Path | None = None, category: str | None = None) -> LibraryObject:
+    """An imported object by name (of `category` if given), or a one-line error (`object_info`)."""
+    root = directory or library_dir()
+    info = object_info(name, root, category)
+    try:
+        mesh = trimesh.load(root / name / "mesh.obj", force="mesh", process=True)
+    except (ValueError, OSError) as exc:
+        raise ValueError(f"{root / name}: not a readable library object ({exc})") from None
     mesh.metadata.update(name=name, imported=True, category=info["category"])
-    return LibraryObject(name, info["category"], mesh, folder / "collision.obj", info)
+    return LibraryObject(name, info["category"], mesh, root / name / "collision.obj", info)
 
 
 def simplified(mesh: trimesh.Trimesh, faces: int = COLLISION_FACES) -> trimesh.Trimesh:

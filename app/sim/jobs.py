@@ -68,7 +68,7 @@ def spawn_test_object(world: SimWorld, t: Task, pose: str, rng: np.random.Genera
     """An unseen object: test-split instance, uniform scale and the pose setting's pose, all from rng;
     or the imported `source` at scale 1 in a pose from rng."""
     instance = int(rng.choice(split(t.category, "test")))
-    scale = float(rng.uniform(*SCALE_RANGE))
+    scale = float(rng.uniform(*SCALE_RANGE))  # drawn for imported objects too: the pose is the same draw either way
     if source is not None:
         return spawn(world, t.category, instance, pose, rng=rng, source=source)
     return spawn(world, t.category, instance, pose, scale=scale, rng=rng)

@@ -15,10 +15,11 @@ Both judges consume the scene: they move the object. Run them on a freshly spawn
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Callable
 
 import numpy as np
 
-from app.sim.spawn import SpawnedObject, hold, release
+from app.sim.spawn import SpawnedObject, hold, release, spawn
 from hardware.bullet import p
 from hardware.gripper_geometry import GripperGeometry
 from hardware.sim.floating_gripper import FloatingGripper
@@ -54,6 +55,17 @@ def _set_collision(world: SimWorld, a: int, b: int, enabled: bool) -> None:
     for la in range(-1, p.getNumJoints(a, physicsClientId=cid)):
         for lb in range(-1, p.getNumJoints(b, physicsClientId=cid)):
             p.setCollisionFilterPair(a, b, la, lb, int(enabled), physicsClientId=cid)
+
+
+def judged_copy(world: SimWorld, obj: SpawnedObject, T_world_obj: np.ndarray,
+                judge: Callable[[SpawnedObject], Verdict], pose: str = "upright") -> Verdict:
+    """A judge's verdict on a fresh copy of `obj` (same instance or imported object, same scale) at
+    T_world_obj, removed again afterwards: the judges consume the scene they are given."""
+    copy = spawn(world, obj.category, obj.seed, pose, scale=obj.scale, T_world_obj=T_world_obj, source=obj.source)
+    try:
+        return judge(copy)
+    finally:
+        world.remove(copy.body)
 
 
 def judge_grasp(world: SimWorld, obj: SpawnedObject, T_world_tcp: np.ndarray, avoid: tuple[int, ...] = ()) -> Verdict:

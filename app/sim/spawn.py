@@ -70,7 +70,7 @@ def spawn(world: SimWorld, category: str, seed: int, pose: str = "upright", scal
     """Add an instance (or the imported `source`) to the world (at T_world_obj, or a sampled pose) and
     let it settle if free."""
     rng = rng or np.random.default_rng(seed)
-    if source is not None and source.category != category:
+    if source is not None and source.category != category:  # the message `object_info` gives on load
         raise ValueError(f"object {source.name!r} is a {source.category}, not a {category}")
     canonical = source.mesh if source else generate(category, seed)
     mesh = canonical.copy()

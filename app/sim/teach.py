@@ -19,7 +19,7 @@ from app.perception import object_cloud
 from app.sim.cell import SimCell
 from app.sim.judges import judge_grasp, judge_place
 from app.sim.spawn import spawn
-from app.tasks.demo import Demo, save_demo
+from app.tasks.demo import Demo, intrinsics_record, save_demo
 from app.tasks.task import Task, teacher_grasp, teacher_place
 
 
@@ -54,9 +54,8 @@ def record_demo(cell: SimCell, t: Task, seed: int, T_base_cam: np.ndarray, rng: 
         world.remove(obj.body)
     if not place.success:
         return None, f"place failed: {place.reason}"
-    K = cell.camera.intrinsics
     demo = Demo(t.name, cloud, T_base_obj, T_base_obj @ T_obj_tcp, T_fixture_obj, T_base_fixture, T_base_cam,
-                {k: getattr(K, k) for k in ("width", "height", "fx", "fy", "cx", "cy")}, t.category, seed,
+                intrinsics_record(cell.camera.intrinsics), t.category, seed,
                 obj.scale, name, {"grasp": grasp.reason, "place": place.reason},
                 taught="teacher" if poses.T_obj_tcp is None and poses.T_fixture_obj is None else "file")
     return demo, "kept"

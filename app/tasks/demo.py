@@ -49,6 +49,11 @@ class Demo:
         return self.T_base_obj @ invert(self.T_fixture_obj)
 
 
+def intrinsics_record(K) -> dict:
+    """A camera's intrinsics (`hardware.interfaces.CameraIntrinsics`) as a demo stores them."""
+    return {k: getattr(K, k) for k in ("width", "height", "fx", "fy", "cx", "cy")}
+
+
 def save_demo(demo: Demo, path: str | Path) -> Path:
     """Write a demo atomically."""
     header = {"format": FORMAT, "task": demo.task, "category": demo.category, "seed": demo.seed,

@@ -36,9 +36,9 @@ from app.objects.library import LibraryObject
 from app.perception import object_cloud
 from app.predict.predict import Prediction, predict
 from app.sim.cell import SimCell, add_fixtures
-from app.sim.judges import Verdict, judge_grasp, judge_place
+from app.sim.judges import Verdict, judge_grasp, judge_place, judged_copy
 from app.sim.spawn import SpawnedObject, spawn
-from app.tasks.demo import DEMO_GLOB, Demo, load_demo, save_demo
+from app.tasks.demo import DEMO_GLOB, Demo, intrinsics_record, load_demo, save_demo
 from app.tasks.library import task_templates
 from app.tasks.staging import staged
 from app.tasks.task import Task
@@ -193,7 +193,7 @@ class TeachSession:
             taught = self._require(held=True)
             T_base_obj = self.cell.world.pose(taught.obj.body)
             taught.T_fixture_obj = invert(self.T_base_fixture) @ T_base_obj
-            verdict = self._judged(taught, T_base_obj, lambda o: judge_place(
+            verdict = judged_copy(self.judges, taught.obj, T_base_obj, lambda o: judge_place(
                 self.judges, o, T_base_obj, self.judge_fixtures[self.task.fixture], self.task.upright))
             taught.verdicts["place"], taught.T_tcp_obj = verdict, None
             self.cell.arm.endTeachMode()
@@ -214,8 +214,8 @@ class TeachSession:
             if not taught.verdicts["place"].success:
                 raise ValueError(f"the place failed its judge ({taught.verdicts['place'].reason}): place it again")
             progress(0.1, "judging the grasp")
-            grasp = self._judged(taught, taught.T_base_obj,
-                                 lambda o: judge_grasp(self.judges, o, taught.T_base_tcp))
+            grasp = judged_copy(self.judges, taught.obj, taught.T_base_obj,
+                                lambda o: judge_grasp(self.judges, o, taught.T_base_tcp))
             if not grasp.success:
                 raise ValueError(f"the grasp failed its judge ({grasp.reason}): grasp it again")
             demo = self._demo(taught, grasp)
@@ -282,29 +282,17 @@ class TeachSession:
         """After a failed lift: fingers open, the object back where it was seen, the TCP at the grasp."""
         self.cell.gripper.open()
         self.cell.world.set_pose(taught.obj.body, taught.T_base_obj)
-        with self.scene.fingers(self.scene.geometry.stroke):
-            try:
-                q = solve(self.scene.kinematics, T_grasp, self.q(), None, GUIDE_IK)
-                self.cell.robot.reset_arm(q)
-            except NoIKSolution:
-                pass
-
-    def _judged(self, taught: Taught, T_base_obj: np.ndarray, judge: Callable[[SpawnedObject], Verdict]) -> Verdict:
-        """A judge's verdict on a fresh copy of the object at T_base_obj in the judges' world."""
-        o = taught.obj
-        copy = spawn(self.judges, o.category, o.seed, "upright", scale=o.scale, T_world_obj=T_base_obj, source=o.source)
         try:
-            return judge(copy)
-        finally:
-            self.judges.remove(copy.body)
+            self.cell.robot.reset_arm(solve(self.scene.kinematics, T_grasp, self.q(), None, GUIDE_IK))
+        except NoIKSolution:
+            pass
 
     def _demo(self, taught: Taught, grasp: Verdict) -> Demo:
         names = self.demo_names()
         index = 1 + max((int(n.split("-")[-1]) for n in names if n.split("-")[-1].isdigit()), default=-1)
-        K = self.cell.camera.intrinsics
         o = taught.obj
         return Demo(self.task.name, taught.cloud, taught.T_base_obj, taught.T_base_tcp, taught.T_fixture_obj,
-                    self.T_base_fixture, self.T_base_cam,
-                    {k: getattr(K, k) for k in ("width", "height", "fx", "fy", "cx", "cy")}, o.category, o.seed,
+                    self.T_base_fixture, self.T_base_cam, intrinsics_record(self.cell.camera.intrinsics),
+                    o.category, o.seed,
                     o.scale, f"demo-{index:02d}", {"grasp": grasp.reason, "place": taught.verdicts["place"].reason},
                     object=o.source.name if o.source else "", taught="page")
