@@ -143,6 +143,7 @@ def test_teaching_on_an_imported_scan_saves_a_demo_that_names_it(tmp_path):
 def test_nift_teach_web_serves_the_page_and_stops_on_interrupt(tmp_path):
     """`nift teach --web` as a user starts it: the page answers HTTP on loopback; Ctrl-C ends it cleanly."""
     import signal
+    import threading
     import time
     import urllib.request
 
@@ -150,17 +151,24 @@ def test_nift_teach_web_serves_the_page_and_stops_on_interrupt(tmp_path):
     proc = subprocess.Popen([sys.executable, "-m", "app.cli", "teach", "--task", "bowl", "--web", "--port", str(port),
                              "--out", str(tmp_path / "bowl"), "--calibration", str(tmp_path / "cal.json")],
                             cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    lines: list[str] = []
+    reader = threading.Thread(target=lambda: lines.extend(iter(proc.stdout.readline, "")), daemon=True)
+    reader.start()
     try:
         deadline, html = time.monotonic() + 240, ""
-        while time.monotonic() < deadline and not html:
-            try:
-                html = urllib.request.urlopen(f"http://127.0.0.1:{port}", timeout=2).read().decode()
+        while time.monotonic() < deadline and not (html and any("Ctrl-C stops" in line for line in lines)):
+            try:  # the user presses Ctrl-C once the page answers and the command has said where it is
+                html = html or urllib.request.urlopen(f"http://127.0.0.1:{port}", timeout=2).read().decode()
             except OSError:
-                time.sleep(1)
+                pass
+            time.sleep(0.5)
         assert "<html" in html.lower() and proc.poll() is None
     finally:
         proc.send_signal(signal.SIGINT)
-        out, err = proc.communicate(timeout=60)
+        proc.wait(timeout=60)
+        reader.join(timeout=10)
+        err = proc.stderr.read()
+    out = "".join(lines)
     assert proc.returncode == 0, err
     assert f"teach page for bowl on http://127.0.0.1:{port}" in out and "stopped" in out
 

@@ -53,9 +53,17 @@ def read_poses(path: Path):
         raise ValueError(f"{path}: expected JSON with instance, T_obj_tcp and T_fixture_obj ({exc})") from None
 
 
+def _interrupt(flag) -> None:
+    """Ctrl-C: remember it, then raise. A library that swallows the KeyboardInterrupt while the page
+    starts (trimesh catches BaseException while loading the URDF's meshes) cannot hide it."""
+    flag.set()
+    raise KeyboardInterrupt
+
+
 def web(args: argparse.Namespace, t, out: Path) -> int:
     """`nift teach --web`: the teach page on the live simulated cell until Ctrl-C."""
-    import time
+    import signal
+    import threading
 
     from app.io_utils import writable_directory
     from app.objects.library import load_object
@@ -72,6 +80,8 @@ def web(args: argparse.Namespace, t, out: Path) -> int:
         raise ValueError(f"--port must be 1-65535, got {args.port}")
     writable_directory(out, "--out")
     source = load_object(args.object, category=t.category) if args.object else None
+    interrupted = threading.Event()
+    signal.signal(signal.SIGINT, lambda *_: _interrupt(interrupted))
     with SimCell(cell_config(args)) as cell:
         T_base_cam = ensure_calibration(cell, args.calibration)
         session = TeachSession(cell, t, out, T_base_cam, source, args.seed)
@@ -79,10 +89,10 @@ def web(args: argparse.Namespace, t, out: Path) -> int:
         where = "" if args.host in ("127.0.0.1", "localhost", "::1") else " (reachable from the network, no password)"
         print(f"teach page for {t.name} on {page.url}{where}; demos go to {out}; Ctrl-C stops", flush=True)
         try:
-            while True:
-                time.sleep(1.0)
+            while not interrupted.wait(1.0):
+                pass
         except KeyboardInterrupt:
-            print("teach page stopped")
+            print("teach page stopped", flush=True)
         finally:
             page.stop()
             session.close()
