@@ -3,11 +3,16 @@
 Frames: poses are expressed in the UR controller's `base` frame (the URDF's `base` link, which is
 `base_link` turned by pi about z) - the frame a real UR reports `getActualTCPPose` in and the world
 frame of this application. The TCP is `tool0` composed with a settable offset.
+
+Closed-form IK (`ik_all`: every branch) comes from ur_analytic_ik, whose UR5 `base` -> `tool0`
+forward kinematics equals this URDF's (a test checks it).
 """
 from __future__ import annotations
 
 import numpy as np
 import pinocchio as pin
+import ur_analytic_ik
+
 
 from hardware.robot_description import ur5_urdf
 
@@ -66,6 +71,28 @@ class UR5Kinematics:
         shifted = q + 2 * np.pi * np.round((q_ref - q) / (2 * np.pi))
         inside = (shifted >= self.lower) & (shifted <= self.upper)
         return np.where(inside, shifted, q)
+
+    def ik_all(self, T_base_target: np.ndarray, q_ref: np.ndarray, tol: float = 1e-6) -> list[np.ndarray]:
+        """Every closed-form IK branch (up to 8: shoulder, elbow and wrist each two ways) reaching
+        T_base_target, each joint shifted by 2 pi to be nearest q_ref; FK-checked to `tol` m / rad."""
+        T_base_tool0 = np.ascontiguousarray(np.asarray(T_base_target, float) @ np.linalg.inv(self.T_tool0_tcp))
+        found = []
+        for q in ur_analytic_ik.ur5.inverse_kinematics(T_base_tool0):
+            q = np.asarray(q, float)
+            if not np.isfinite(q).all():
+                continue
+            q = self.nearest_equivalent(q, q_ref)
+            if (q < self.lower).any() or (q > self.upper).any():
+                continue
+            error = np.linalg.inv(self.fk(q)) @ T_base_target
+            if np.abs(error[:3, 3]).max() < tol and np.abs(error[:3, :3] - np.eye(3)).max() < tol:
+                found.append(q)
+        return found
+
+    def ik_nearest(self, T_base_target: np.ndarray, q_ref: np.ndarray) -> np.ndarray | None:
+        """The closed-form IK branch nearest q_ref (max joint difference), or None out of reach."""
+        found = self.ik_all(T_base_target, q_ref)
+        return min(found, key=lambda q: float(np.abs(q - q_ref).max())) if found else None
 
     def ik(self, T_base_target: np.ndarray, q_seed: np.ndarray, tol_pos: float = 1e-5,
            tol_rot: float = 1e-4, max_iter: int = 300, damping: float = 1e-3) -> np.ndarray | None:

@@ -10,7 +10,7 @@ in frame b into frame a, so `T_a_c = T_a_b @ T_b_c`. At device boundaries poses 
 from __future__ import annotations
 
 import numpy as np
-from scipy.spatial.transform import Rotation, Slerp
+from scipy.spatial.transform import Rotation
 
 __all__ = [
     "make_pose", "invert", "compose", "transform_points", "rotvec_to_matrix", "matrix_to_rotvec",
@@ -105,7 +105,8 @@ def interpolate_pose(T0: np.ndarray, T1: np.ndarray, s: float) -> np.ndarray:
     """Pose at fraction s in [0, 1] of the way from T0 to T1 (position lerp, rotation slerp)."""
     T = np.eye(4)
     T[:3, 3] = (1 - s) * T0[:3, 3] + s * T1[:3, 3]
-    T[:3, :3] = Slerp([0.0, 1.0], Rotation.from_matrix([T0[:3, :3], T1[:3, :3]]))(s).as_matrix()
+    # slerp: R0 exp(s log(R0^T R1))
+    T[:3, :3] = T0[:3, :3] @ Rotation.from_rotvec(s * Rotation.from_matrix(T0[:3, :3].T @ T1[:3, :3]).as_rotvec()).as_matrix()
     return T
 
 

@@ -34,7 +34,7 @@ def scene():
 
 def test_ik_round_trip_on_100_random_reachable_poses(kin):
     rng = np.random.default_rng(0)
-    config = IKConfig(random_seeds=6)
+    config = IKConfig()
     for _ in range(100):
         q_true = rng.uniform(-np.pi, np.pi, 6)
         target = kin.fk(q_true)
@@ -44,13 +44,33 @@ def test_ik_round_trip_on_100_random_reachable_poses(kin):
         assert np.degrees(rotation_angle(reached[:3, :3].T @ target[:3, :3])) < 0.01
 
 
+def test_closed_form_ik_gives_every_branch_and_its_frames_are_the_urdf_s(kin):
+    """ur_analytic_ik's tool0 FK is this URDF's; ik_all recovers the configuration a pose came from
+    among up to 8 distinct branches, each reaching the pose, and the 8 of a generic pose differ."""
+    import ur_analytic_ik
+
+    rng = np.random.default_rng(3)
+    counts = []
+    for _ in range(100):
+        q_true = rng.uniform(-np.pi, np.pi, 6)
+        assert np.allclose(ur_analytic_ik.ur5.forward_kinematics(*q_true), kin.frame_pose(q_true, "tool0"), atol=1e-9)
+        target = kin.fk(q_true)
+        branches = kin.ik_all(target, q_true)
+        assert any(np.abs(q - q_true).max() < 1e-6 for q in branches)
+        for q in branches:
+            assert np.abs(kin.fk(q) - target).max() < 1e-6
+        assert all(np.abs(a - b).max() > 1e-3 for i, a in enumerate(branches) for b in branches[:i])
+        counts.append(len(branches))
+    assert max(counts) == 8 and min(counts) >= 2
+
+
 def test_ik_out_of_reach_and_colliding_poses_are_refused_with_reasons(kin, scene):
     far = make_pose(rotvec_to_matrix([np.pi, 0, 0]), [1.5, 0.0, 0.2])
     with pytest.raises(NoIKSolution, match="out of reach"):
-        solve(kin, far, HOME_Q, scene, IKConfig(random_seeds=4))
+        solve(kin, far, HOME_Q, scene, IKConfig())
     below_table = make_pose(rotvec_to_matrix([np.pi, 0, 0]), [0.5, 0.0, -0.05])
     with pytest.raises(NoIKSolution, match="collides .*table"):
-        solve(kin, below_table, HOME_Q, scene, IKConfig(random_seeds=4))
+        solve(kin, below_table, HOME_Q, scene, IKConfig())
 
 
 def test_scene_flags_the_table_and_not_home(scene):
@@ -100,7 +120,7 @@ class _SteepWrist:
     def __init__(self, flip_at: float | None = None) -> None:
         self.flip_at = flip_at
 
-    def ik(self, T, seed):
+    def ik_nearest(self, T, q_ref):
         q = np.zeros(6)
         q[3] = 30.0 * T[0, 3] + (np.pi if self.flip_at is not None and T[0, 3] > self.flip_at else 0.0)
         return q

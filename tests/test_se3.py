@@ -41,3 +41,17 @@ def test_transform_points_and_pose_error(rng):
     assert np.allclose(se3.transform_points(se3.invert(T), se3.transform_points(T, p)), p)
     dt, dr = se3.pose_error(T, T @ se3.make_pose(se3.rotvec_to_matrix([0.1, 0, 0]), [0, 0.02, 0]))
     assert np.isclose(dt, 0.02) and np.isclose(dr, 0.1)
+
+
+def test_interpolated_pose_is_scipy_slerp_and_lerp(rng):
+    """Halfway and at random s the rotation is scipy's Slerp of the two ends; the ends are exact."""
+    from scipy.spatial.transform import Rotation, Slerp
+
+    for _ in range(50):
+        R0, R1 = Rotation.random(2, random_state=rng.integers(1 << 31)).as_matrix()
+        T0, T1 = se3.make_pose(R0, rng.normal(size=3)), se3.make_pose(R1, rng.normal(size=3))
+        s = float(rng.uniform())
+        T = se3.interpolate_pose(T0, T1, s)
+        assert np.allclose(T[:3, :3], Slerp([0.0, 1.0], Rotation.from_matrix([R0, R1]))(s).as_matrix(), atol=1e-9)
+        assert np.allclose(T[:3, 3], (1 - s) * T0[:3, 3] + s * T1[:3, 3])
+        assert np.allclose(se3.interpolate_pose(T0, T1, 0.0), T0) and np.allclose(se3.interpolate_pose(T0, T1, 1.0), T1)

@@ -24,7 +24,7 @@ def continued_ik(kin: UR5Kinematics, T0: np.ndarray, T1: np.ndarray, s0: float, 
                  depth: int = REFINE) -> np.ndarray | None:
     """IK at interpolate_pose(T0, T1, s1) reached continuously from q0 (the solution at s0): bisect
     the step while its joints jump; None when IK fails or a jump persists at the finest step."""
-    q1 = kin.ik(interpolate_pose(T0, T1, s1), q0)
+    q1 = kin.ik_nearest(interpolate_pose(T0, T1, s1), q0)
     if q1 is None or np.abs(q1 - q0).max() <= MAX_JOINT_JUMP:
         return q1
     if depth == 0:
@@ -36,13 +36,13 @@ def continued_ik(kin: UR5Kinematics, T0: np.ndarray, T1: np.ndarray, s0: float, 
 
 def line_path(kin: UR5Kinematics, T0: np.ndarray, T1: np.ndarray, q0: np.ndarray, scene: PlanningScene | None = None,
               ignore: tuple[str, ...] = (), what: str = "line") -> np.ndarray:
-    """Joint positions (K, 6) tracing the TCP from T0 (at q0) to T1 on a straight line, each seeded
-    by the previous; NoIKSolution if IK fails, flips or collides on the way."""
+    """Joint positions (K, 6) tracing the TCP from T0 (at q0) to T1 on a straight line, each the
+    closed-form branch nearest the previous; NoIKSolution if IK fails, flips or collides on the way."""
     n = max(2, int(np.ceil(line_length(T0, T1) / STEP)) + 1)
     path = [np.asarray(q0, float)]
     for i in range(1, n):
         s = i / (n - 1)
-        q = kin.ik(interpolate_pose(T0, T1, s), path[-1])
+        q = kin.ik_nearest(interpolate_pose(T0, T1, s), path[-1])
         if q is None:
             raise NoIKSolution(f"{what}: no IK solution at {100 * s:.0f}% of the straight line")
         if np.abs(q - path[-1]).max() > MAX_JOINT_JUMP:  # fast, or a flip: look closer

@@ -11,8 +11,8 @@ Plan (all of it before the arm moves, so an unreachable place fails before the p
     retreat -> clear          straight line up
     clear -> home             joint transit
 
-A two-finger grasp turned half a turn about its approach axis is the same grasp, so both are
-planned and the one with less joint travel is kept. A transit whose direct joint motion would
+A two-finger grasp turned half a turn about its approach axis is the same grasp: the turn whose
+IK is nearer the arm is planned first, the other only if it fails. A transit whose direct joint motion would
 collide follows a path of OMPL's RRT-Connect (`app.motion.sampling`).
 """
 from __future__ import annotations
@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from app.motion.cartesian import line_path
-from app.motion.ik import IKConfig, NoIKSolution, solutions
+from app.motion.ik import IKConfig, NoIKSolution, joint_distance, solutions
 from app.motion.sampling import NoPath, SamplingConfig, densify, plan_joint_path
 from app.motion.scene import PlanningScene
 from app.motion.trajectory import JointTrajectory, path_timing, through_waypoints
@@ -52,7 +52,7 @@ class ExecutorConfig:
     line_jerk: float = 5.0  # m/s^3
     check_every: int = 5  # collision-check every n-th transit sample (20 ms at 250 Hz)
     end_tolerance: float = 0.02  # rad: a segment that ends farther than this from its target failed
-    ik_candidates: int = 4  # IK solutions tried at the grasp and at the place before giving up
+    ik_candidates: int = 8  # IK branches tried at the grasp and at the place before giving up (all of them)
     home_q: tuple[float, ...] = tuple(HOME_Q)
     ik: IKConfig = IKConfig()
     sampling: SamplingConfig = SamplingConfig()
@@ -125,18 +125,25 @@ class Planner:
         opening while the object is held (carry, place) and once it is let go (retreat, clear, home) -
         fully open when not given."""
         start = time.perf_counter()
-        plans, errors = [], []
-        for flip in (np.eye(4), HALF_TURN):
+        errors = []
+        for flip in self._flips_nearest_first(q_start, T_base_grasp):
             try:
-                plans.append(self._pick_place(q_start, T_base_grasp @ flip, T_base_place @ flip, place_direction,
-                                              widths))
+                plan = self._pick_place(q_start, T_base_grasp @ flip, T_base_place @ flip, place_direction, widths)
             except NoIKSolution as exc:
                 errors.append(str(exc))
-        if not plans:
-            raise NoIKSolution(" / ".join(dict.fromkeys(errors)))
-        best = min(plans, key=lambda p: p.travel)
-        best.seconds = time.perf_counter() - start
-        return best
+                continue
+            plan.seconds = time.perf_counter() - start
+            return plan
+        raise NoIKSolution(" / ".join(dict.fromkeys(errors)))
+
+    def _flips_nearest_first(self, q_start: np.ndarray, T_base_grasp: np.ndarray) -> list[np.ndarray]:
+        """The grasp and its half-turn, the one whose nearest IK branch is nearer q_start first (the
+        other is planned only if the first cannot be)."""
+        def distance(flip: np.ndarray) -> float:
+            branches = self.kin.ik_all(T_base_grasp @ flip, q_start)
+            return min((joint_distance(q, q_start, self.config.ik.joint_weights) for q in branches), default=np.inf)
+
+        return sorted((np.eye(4), HALF_TURN), key=distance)
 
     def _pick_place(self, q_start, T_grasp, T_place, place_direction, widths) -> PickPlacePlan:
         c = self.config

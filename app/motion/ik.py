@@ -1,5 +1,5 @@
-"""Inverse kinematics for planning: Pinocchio damped least squares from several seeds, the
-collision-free solution nearest the current configuration."""
+"""Inverse kinematics for planning: the UR5's closed-form branches, the collision-free one nearest
+the current configuration first."""
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -8,16 +8,13 @@ import numpy as np
 
 from app.motion.scene import PlanningScene
 from hardware.kinematics import UR5Kinematics
-from hardware.robot_description import HOME_Q
 
 
 @dataclass(frozen=True)
 class IKConfig:
-    """How hard IK tries: random seeds beyond the current and home configurations."""
+    """How IK solutions are ranked: by this weighted joint distance to the current configuration."""
 
-    random_seeds: int = 24
-    seed: int = 0
-    joint_weights: tuple[float, ...] = (2.0, 2.0, 1.5, 1.0, 1.0, 0.5)  # distance metric: move the big joints less
+    joint_weights: tuple[float, ...] = (2.0, 2.0, 1.5, 1.0, 1.0, 0.5)  # move the big joints less
 
 
 class NoIKSolution(ValueError):
@@ -31,28 +28,21 @@ def joint_distance(q: np.ndarray, q_ref: np.ndarray, weights: tuple[float, ...])
 
 def solutions(kin: UR5Kinematics, T_base_tcp: np.ndarray, q_current: np.ndarray, scene: PlanningScene | None = None,
               config: IKConfig = IKConfig(), ignore: tuple[str, ...] = (), what: str = "pose") -> list[np.ndarray]:
-    """Distinct collision-free IK solutions for T_base_tcp, nearest q_current first; NoIKSolution
-    (out of reach, or every solution collides - with what) if there is none."""
-    rng = np.random.default_rng(config.seed)
-    seeds = [np.asarray(q_current, float), HOME_Q,
-             *rng.uniform(np.maximum(kin.lower, -np.pi), np.minimum(kin.upper, np.pi), (config.random_seeds, 6))]
+    """The collision-free closed-form IK branches for T_base_tcp (`UR5Kinematics.ik_all`), nearest
+    q_current first; NoIKSolution (out of reach, or every branch collides - with what) if there is none."""
     found: list[np.ndarray] = []
-    reached, blocked = 0, set()
-    for seed in seeds:
-        q = kin.ik(T_base_tcp, seed)
-        if q is None:
-            continue
-        q = kin.nearest_equivalent(q, q_current)
-        reached += 1
+    branches = kin.ik_all(T_base_tcp, q_current)
+    blocked: set[str] = set()
+    for q in branches:
         if any(np.abs(q - other).max() < 1e-3 for other in found):
-            continue
+            continue  # two branches meet at a singularity
         if scene is not None and (hits := scene.collisions(q, ignore)):
             blocked.update(hits)
             continue
         found.append(q)
     if not found:
         xyz = np.round(T_base_tcp[:3, 3], 3).tolist()
-        if reached == 0:
+        if not branches:
             raise NoIKSolution(f"no IK solution for the {what} at {xyz} (out of reach)")
         raise NoIKSolution(f"every IK solution for the {what} at {xyz} collides ({', '.join(sorted(blocked)[:4])})")
     return sorted(found, key=lambda q: joint_distance(q, q_current, config.joint_weights))
@@ -64,18 +54,16 @@ def solve(kin: UR5Kinematics, T_base_tcp: np.ndarray, q_current: np.ndarray, sce
     return solutions(kin, T_base_tcp, q_current, scene, config, ignore, what)[0]
 
 
-def reach_failure(kin: UR5Kinematics, scene: PlanningScene, q_current: np.ndarray, ignore: tuple[str, ...] = (),
-                  random_seeds: int = 6):
+def reach_failure(kin: UR5Kinematics, scene: PlanningScene, q_current: np.ndarray, ignore: tuple[str, ...] = ()):
     """A quick test of TCP poses, pose (4, 4) -> why the cell cannot put its TCP there, or None: the
-    open gripper alone hits something (`PlanningScene.gripper_collisions`), or no collision-free IK
-    solution from a few seeds (~10 ms a pose). A pose it passes may still fail the full plan (the lines to it)."""
-    config = IKConfig(random_seeds=random_seeds)
+    open gripper alone hits something (`PlanningScene.gripper_collisions`), or no IK branch is
+    collision-free (~2 ms a pose). A pose it passes may still fail the full plan (the lines to it)."""
 
     def failure(T_base_tcp: np.ndarray, what: str = "pose") -> str | None:
         if hits := scene.gripper_collisions(T_base_tcp, ignore):
             return f"the gripper at the {what} hits {', '.join(hits)}"
         try:
-            solutions(kin, T_base_tcp, q_current, scene, config, ignore, what)
+            solutions(kin, T_base_tcp, q_current, scene, IKConfig(), ignore, what)
         except NoIKSolution as exc:
             return str(exc)
         return None
