@@ -35,9 +35,12 @@ def test_unreachable_place_fails_at_planning_and_leaves_the_arm_safe():
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("name", ["mug", "bowl", "bottle"])
-def test_teacher_job_succeeds_end_to_end(name, tmp_path):
-    result, q, width, stopped = _run(CellConfig(), JobSpec(task(name), seed=0), "teacher", tmp_path / "job.png")
+@pytest.mark.parametrize("name, pose, seed", [("mug", "upright", 0), ("bowl", "upright", 0), ("bottle", "upright", 0),
+                                              ("mug", "resting", 1), ("bowl", "resting", 0), ("bottle", "resting", 1)])
+def test_teacher_job_succeeds_end_to_end(name, pose, seed, tmp_path):
+    """The oracle's job, upright and lying as it fell (seeds where a demo-like grasp exists)."""
+    spec = JobSpec(task(name), seed=seed, pose=pose)
+    result, q, width, stopped = _run(CellConfig(), spec, "teacher", tmp_path / "job.png")
     assert result.success, result.reason
     assert [s for s in result.seconds] == ["capture", "perceive", "imitate", "plan", "approach", "grasp", "lift",
                                            "carry", "place", "release", "retreat", "verify"]

@@ -328,3 +328,33 @@ def test_the_planning_scene_does_not_grow_with_each_jobs_cloud():
         assert resident_mb() - before < 15.0
     finally:
         scene.close()
+
+
+def test_a_blocked_approach_line_is_replaced_by_a_shorter_one_that_keeps_the_grasp(kin, limits, scene):
+    """A stand-in obstacle fills the last 4 cm of the default 10 cm approach line (TCP 7-11 cm back
+    along a tilted grasp's axis): the plan keeps the grasp pose and approaches from 6 cm; without the
+    alternatives it fails at the approach."""
+    from dataclasses import replace
+
+    from app.motion.executor import ExecutorConfig, Planner
+
+    tilted = rotvec_to_matrix([0.0, np.pi / 4, 0.0]) @ rotvec_to_matrix([np.pi, 0, 0])  # the lift is not the approach
+    T_grasp = make_pose(tilted, [0.5, 0.05, 0.15])
+    T_place = make_pose(rotvec_to_matrix([np.pi, 0, 0]), [0.45, -0.15, 0.15])
+    real = scene.collisions
+
+    def collisions(q, ignore=()):
+        p = (np.linalg.inv(T_grasp) @ kin.fk(q))[:3, 3]  # the TCP in the grasp's frame
+        blocked = np.linalg.norm(p[:2]) < 0.015 and -0.11 < p[2] < -0.07
+        return real(q, ignore) + (["gripper_palm-box"] if blocked else [])
+
+    scene.collisions = collisions
+    plan = Planner(kin, limits, scene).pick_place(HOME_Q, T_grasp, T_place, np.array([0.0, 0.0, 1.0]))
+    approach = plan.segment("approach")
+    start = np.linalg.inv(plan.T_base_grasp) @ kin.fk(approach.q[0])
+    assert np.allclose(start[:3, 3], [0.0, 0.0, -0.06], atol=1e-4)
+    assert np.allclose(kin.fk(approach.end), plan.T_base_grasp, atol=1e-4)
+    assert not any("box" in h for q in approach.q for h in collisions(q))
+    only_default = replace(ExecutorConfig(), shorter=(), approach_cone=0.0)
+    with pytest.raises(NoIKSolution, match="approach: collision .*gripper_palm-box"):
+        Planner(kin, limits, scene, only_default).pick_place(HOME_Q, T_grasp, T_place, np.array([0.0, 0.0, 1.0]))

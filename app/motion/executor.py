@@ -3,8 +3,9 @@
 Plan (all of it before the arm moves, so an unreachable place fails before the pick):
 
     start -> pre-grasp        joint transit (Ruckig), collision-checked against table, fixtures, object hull
-    pre-grasp -> grasp        straight TCP line along the tool's approach axis (dense IK)
-    grasp -> lift             straight line up
+    pre-grasp -> grasp        straight TCP line along the tool's approach axis (dense IK); if it fails,
+                              the same axis shorter, then 15 degrees off it (`approach_offsets`)
+    grasp -> lift             straight line up (shorter if the full one fails)
     lift -> pre-place         joint transit
     pre-place -> place        straight line along the fixture's approach direction
     place -> retreat          straight line back along the tool's approach axis
@@ -41,6 +42,8 @@ class ExecutorConfig:
     """Distances, speeds and tolerances of a pick-and-place motion."""
 
     approach_distance: float = 0.10  # m, pre-grasp back along the tool's approach (z) axis
+    shorter: tuple[float, ...] = (0.6, 0.4)  # fractions of the approach and the lift tried when a line fails
+    approach_cone: float = 15.0  # degrees off the axis of the approaches tried after those
     lift_height: float = 0.12  # m, straight up after the grasp
     place_distance: float = 0.10  # m, pre-place back along the fixture's approach direction
     peg_clearance: float = 0.006  # m the object is placed above its hang on a peg, and dropped (app.motion.place_line)
@@ -147,12 +150,16 @@ class Planner:
 
     def _pick_place(self, q_start, T_grasp, T_place, place_direction, widths) -> PickPlacePlan:
         c = self.config
-        T_pre_grasp = T_grasp @ make_pose(t=[0.0, 0.0, -c.approach_distance])
-        T_lift = make_pose(T_grasp[:3, :3], T_grasp[:3, 3] + [0.0, 0.0, c.lift_height])
+        lifts = [make_pose(T_grasp[:3, :3], T_grasp[:3, 3] + [0.0, 0.0, c.lift_height * k]) for k in (1.0, *c.shorter)]
+
+        def grasp_lines(q: np.ndarray):
+            lift = self._first_line(q, lifts, "lift")  # shorter lifts: the carry that follows is checked
+            approaches = [T_grasp @ make_pose(t=offset) for offset in approach_offsets(c)]
+            return reverse(self._first_line(q, approaches, "approach")), lift
+
         # IK at the ends of the lines first: they decide the configuration each line runs in
         approach, lift = self._first(solutions(self.kin, T_grasp, q_start, self.scene, c.ik, (OBJECT,), "grasp"),
-                                     lambda q: (reverse(self.line(q, T_pre_grasp, "approach", (OBJECT,))),
-                                                self.line(q, T_lift, "lift", (OBJECT,))))
+                                     grasp_lines)
         to_pre_grasp = self.transit(q_start, approach.q[0], "to pre-grasp")
         segments = [to_pre_grasp, approach, lift, *self._place_segments(lift.end, T_grasp, T_place, place_direction,
                                                                         widths)]
@@ -193,6 +200,16 @@ class Planner:
             home = self.transit(clear.end, np.asarray(c.home_q), "home", ignore=(OBJECT,))
         return [carry, place, retreat, clear, home]
 
+    def _first_line(self, q: np.ndarray, targets: list[np.ndarray], label: str) -> JointTrajectory:
+        """The line from FK(q) to the first target it can follow (the default first, then the alternatives)."""
+        errors = []
+        for T in targets:
+            try:
+                return self.line(q, T, label, (OBJECT,))
+            except NoIKSolution as exc:
+                errors.append(str(exc))
+        raise NoIKSolution(errors[0])
+
     def _first(self, candidates: list[np.ndarray], plan_lines):
         """plan_lines(q) for the first IK candidate (of at most `ik_candidates`) whose lines work."""
         errors = []
@@ -208,6 +225,18 @@ class Planner:
             if hits := self.scene.collisions(q, ignore):
                 return hits
         return self.scene.collisions(traj.end, ignore)
+
+
+def approach_offsets(config: ExecutorConfig) -> list[np.ndarray]:
+    """Pre-grasp positions (3,) in the grasp's TCP frame: `approach_distance` back along the tool
+    axis, then the alternatives that keep the grasp (its pose is unchanged): the same axis at
+    `shorter` fractions of the distance, and directions `approach_cone` off the axis at 6 azimuths."""
+    d = config.approach_distance
+    offsets = [np.array([0.0, 0.0, -d * k]) for k in (1.0, *config.shorter)]
+    tilt = np.radians(config.approach_cone)
+    for azimuth in np.arange(6 if tilt > 0 else 0) * np.pi / 3:
+        offsets.append(-d * np.array([np.sin(tilt) * np.cos(azimuth), np.sin(tilt) * np.sin(azimuth), np.cos(tilt)]))
+    return offsets
 
 
 def reverse(traj: JointTrajectory) -> JointTrajectory:
