@@ -75,7 +75,10 @@ class UR5Kinematics:
     def ik_all(self, T_base_target: np.ndarray, q_ref: np.ndarray, tol: float = 1e-6) -> list[np.ndarray]:
         """Every closed-form IK branch (up to 8: shoulder, elbow and wrist each two ways) reaching
         T_base_target, each joint shifted by 2 pi to be nearest q_ref; FK-checked to `tol` m / rad."""
-        T_base_tool0 = np.ascontiguousarray(np.asarray(T_base_target, float) @ np.linalg.inv(self.T_tool0_tcp))
+        T_base_target = np.asarray(T_base_target, float).copy()
+        U, _, Vt = np.linalg.svd(T_base_target[:3, :3])  # the nearest rotation: the library filters
+        T_base_target[:3, :3] = U @ Vt                   # every branch of a slightly non-orthonormal one
+        T_base_tool0 = np.ascontiguousarray(T_base_target @ np.linalg.inv(self.T_tool0_tcp))
         found = []
         for q in ur_analytic_ik.ur5.inverse_kinematics(T_base_tool0):
             q = np.asarray(q, float)

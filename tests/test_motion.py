@@ -62,6 +62,8 @@ def test_closed_form_ik_gives_every_branch_and_its_frames_are_the_urdf_s(kin):
         assert all(np.abs(a - b).max() > 1e-3 for i, a in enumerate(branches) for b in branches[:i])
         counts.append(len(branches))
     assert max(counts) == 8 and min(counts) >= 2
+    rounded = kin.fk(q_true).astype(np.float32).astype(float)  # a pose from a float32 network: not quite a rotation
+    assert kin.ik_all(rounded, q_true), "a pose 1e-7 off a rotation still has its branches"
 
 
 def test_ik_out_of_reach_and_colliding_poses_are_refused_with_reasons(kin, scene):
