@@ -13,7 +13,6 @@ import numpy as np
 import pinocchio as pin
 import ur_analytic_ik
 
-
 from hardware.robot_description import ur5_urdf
 
 JOINT_NAMES = ("shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint",
@@ -76,8 +75,10 @@ class UR5Kinematics:
         """Every closed-form IK branch (up to 8: shoulder, elbow and wrist each two ways) reaching
         T_base_target, each joint shifted by 2 pi to be nearest q_ref; FK-checked to `tol` m / rad."""
         T_base_target = np.asarray(T_base_target, float).copy()
-        U, _, Vt = np.linalg.svd(T_base_target[:3, :3])  # the nearest rotation: the library filters
-        T_base_target[:3, :3] = U @ Vt                   # every branch of a slightly non-orthonormal one
+        R = T_base_target[:3, :3]
+        if np.abs(R.T @ R - np.eye(3)).max() > 1e-12:  # the library filters every branch of a slightly
+            U, _, Vt = np.linalg.svd(R)                 # non-orthonormal rotation (a float32 pose): use
+            T_base_target[:3, :3] = U @ Vt              # the nearest rotation; a rotation stays as it is
         T_base_tool0 = np.ascontiguousarray(T_base_target @ np.linalg.inv(self.T_tool0_tcp))
         found = []
         for q in ur_analytic_ik.ur5.inverse_kinematics(T_base_tool0):
