@@ -105,8 +105,8 @@ def interpolate_pose(T0: np.ndarray, T1: np.ndarray, s: float) -> np.ndarray:
     """Pose at fraction s in [0, 1] of the way from T0 to T1 (position lerp, rotation slerp)."""
     T = np.eye(4)
     T[:3, 3] = (1 - s) * T0[:3, 3] + s * T1[:3, 3]
-    # slerp: R0 exp(s log(R0^T R1))
-    T[:3, :3] = T0[:3, :3] @ Rotation.from_rotvec(s * Rotation.from_matrix(T0[:3, :3].T @ T1[:3, :3]).as_rotvec()).as_matrix()
+    relative = Rotation.from_matrix(T0[:3, :3].T @ T1[:3, :3]).as_rotvec()
+    T[:3, :3] = T0[:3, :3] @ Rotation.from_rotvec(s * relative).as_matrix()  # slerp: R0 exp(s log(R0^T R1))
     return T
 
 

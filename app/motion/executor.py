@@ -13,8 +13,8 @@ Plan (all of it before the arm moves, so an unreachable place fails before the p
     clear -> home             joint transit
 
 A two-finger grasp turned half a turn about its approach axis is the same grasp: the turn whose
-IK is nearer the arm is planned first, the other only if it fails. A transit whose direct joint motion would
-collide follows a path of OMPL's RRT-Connect (`app.motion.sampling`).
+IK is nearer the arm is planned first, the other only if it fails. A transit whose direct joint
+motion would collide follows a path of OMPL's RRT-Connect (`app.motion.sampling`).
 """
 from __future__ import annotations
 
@@ -152,9 +152,10 @@ class Planner:
         c = self.config
         lifts = [make_pose(T_grasp[:3, :3], T_grasp[:3, 3] + [0.0, 0.0, c.lift_height * k]) for k in (1.0, *c.shorter)]
 
+        approaches = [T_grasp @ make_pose(t=offset) for offset in approach_offsets(c)]
+
         def grasp_lines(q: np.ndarray):
             lift = self._first_line(q, lifts, "lift")  # shorter lifts: the carry that follows is checked
-            approaches = [T_grasp @ make_pose(t=offset) for offset in approach_offsets(c)]
             return reverse(self._first_line(q, approaches, "approach")), lift
 
         # IK at the ends of the lines first: they decide the configuration each line runs in
@@ -202,29 +203,28 @@ class Planner:
 
     def _first_line(self, q: np.ndarray, targets: list[np.ndarray], label: str) -> JointTrajectory:
         """The line from FK(q) to the first target it can follow (the default first, then the alternatives)."""
-        errors = []
-        for T in targets:
-            try:
-                return self.line(q, T, label, (OBJECT,))
-            except NoIKSolution as exc:
-                errors.append(str(exc))
-        raise NoIKSolution(errors[0])
+        return first_that_works(targets, lambda T: self.line(q, T, label, (OBJECT,)))
 
     def _first(self, candidates: list[np.ndarray], plan_lines):
         """plan_lines(q) for the first IK candidate (of at most `ik_candidates`) whose lines work."""
-        errors = []
-        for q in candidates[: self.config.ik_candidates]:
-            try:
-                return plan_lines(q)
-            except NoIKSolution as exc:
-                errors.append(str(exc))
-        raise NoIKSolution(errors[0])
+        return first_that_works(candidates[: self.config.ik_candidates], plan_lines)
 
     def _collisions(self, traj: JointTrajectory, ignore: tuple[str, ...]) -> list[str]:
         for q in traj.q[:: self.config.check_every]:
             if hits := self.scene.collisions(q, ignore):
                 return hits
         return self.scene.collisions(traj.end, ignore)
+
+
+def first_that_works(items: list, attempt):
+    """attempt(item) for the first item it succeeds on; the first item's NoIKSolution if none does."""
+    errors = []
+    for item in items:
+        try:
+            return attempt(item)
+        except NoIKSolution as exc:
+            errors.append(str(exc))
+    raise NoIKSolution(errors[0])
 
 
 def approach_offsets(config: ExecutorConfig) -> list[np.ndarray]:

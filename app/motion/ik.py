@@ -63,7 +63,7 @@ def reach_failure(kin: UR5Kinematics, scene: PlanningScene, q_current: np.ndarra
         if hits := scene.gripper_collisions(T_base_tcp, ignore):
             return f"the gripper at the {what} hits {', '.join(hits)}"
         try:
-            solutions(kin, T_base_tcp, q_current, scene, IKConfig(), ignore, what)
+            solutions(kin, T_base_tcp, q_current, scene, ignore=ignore, what=what)
         except NoIKSolution as exc:
             return str(exc)
         return None

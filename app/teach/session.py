@@ -29,7 +29,7 @@ from typing import Callable
 import numpy as np
 
 from app.jobs.job import JOB_IMITATION
-from app.motion.ik import IKConfig, NoIKSolution, solve
+from app.motion.ik import NoIKSolution, solve
 from app.motion.scene import PlanningScene
 from app.objects import split
 from app.objects.library import LibraryObject
@@ -48,7 +48,6 @@ from hardware.sim.world import SimWorld, SimWorldConfig
 LIFT = 0.05  # m the lift check raises a closed gripper
 LIFT_KEPT = 0.8  # share of the lift the object must follow to count as held
 SETTLE = 1.0  # s the cell runs after a release before the page shows it
-GUIDE_IK = IKConfig()  # freedrive: every closed-form branch, the nearest first
 
 Progress = Callable[[float, str], None]
 
@@ -150,7 +149,7 @@ class TeachSession:
             width = self.cell.gripper.width if held else self.scene.geometry.stroke
             try:
                 with self.scene.fingers(width):
-                    q = solve(self.scene.kinematics, T_base_tcp, arm.getActualQ(), self.scene, GUIDE_IK, what="TCP")
+                    q = solve(self.scene.kinematics, T_base_tcp, arm.getActualQ(), self.scene, what="TCP")
             except NoIKSolution as exc:
                 return Step(False, str(exc))
             if not arm.isTeachMode():
@@ -283,7 +282,7 @@ class TeachSession:
         self.cell.gripper.open()
         self.cell.world.set_pose(taught.obj.body, taught.T_base_obj)
         try:
-            self.cell.robot.reset_arm(solve(self.scene.kinematics, T_grasp, self.q(), None, GUIDE_IK))
+            self.cell.robot.reset_arm(solve(self.scene.kinematics, T_grasp, self.q()))
         except NoIKSolution:
             pass
 
