@@ -14,13 +14,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from app.motion.executor import HALF_TURN, PickPlacePlan, Planner
+from app.motion.executor import HALF_TURN, FingerWidths, PickPlacePlan, Planner
 from app.motion.ik import NoIKSolution
 from app.predict.candidates import Candidate
 from hardware.se3 import pose_to_ur
 
 Failure = Callable[[np.ndarray, str], "str | None"]  # TCP pose (4, 4), what it is -> why not, or None
-Widths = Callable[[np.ndarray], tuple[float, float]]  # grasp (4, 4) -> fingers' opening (m) holding, let go
+Widths = Callable[[np.ndarray], FingerWidths]  # grasp (4, 4) -> the fingers' openings on the way
 
 
 NO_DEMO_LIKE_GRASP = "no grasp like the demos'"  # how a job's reason starts when none exists (bench counts it apart)
@@ -57,13 +57,14 @@ def describe(c: Candidate, outcome: str) -> dict:
 
 
 class _Cached:
-    """failure(T, what), else failure(T @ half-turn, what): None when either half-turn passes; remembered per pose."""
+    """failure(T, what), else failure(T @ half-turn, what): None when either half-turn passes; remembered per
+    pose, what it is and the fingers' opening."""
 
     def __init__(self, failure: Failure) -> None:
         self.failure, self.seen = failure, {}
 
     def __call__(self, T: np.ndarray, what: str, width: float = 0.0) -> str | None:
-        key = (np.round(T, 6).tobytes(), width)
+        key = (np.round(T, 6).tobytes(), what, width)
         if key not in self.seen:
             why = self.failure(T, what)
             self.seen[key] = None if why is None or self.failure(T @ HALF_TURN, what) is None else why
@@ -76,24 +77,25 @@ def choose(planner: Planner, candidates: list[Candidate], q_start: np.ndarray,
     """Plan the first pair that passes the quick test at its grasp and its place and the full plan;
     NoCandidate with the best pair's reason and the count of pairs tried when none does. `place_direction`:
     the line onto the fixture, or a function of the pair giving it. `widths(T_grasp)`:
-    the fingers' opening while holding and once let go, for the place's tests (fully open if not given)."""
+    the fingers' openings on the approach, holding and let go (fully open if not given)."""
     quick = _Cached(failure)
     stroke = planner.scene.geometry.stroke
     tried: list[dict] = []
     plans = 0
     for c in candidates:
-        held, released = widths(c.T_base_tcp) if widths else (stroke, stroke)
-        why = quick(c.T_base_tcp, "grasp")
+        opening = widths(c.T_base_tcp) if widths else FingerWidths.fully_open(stroke)
+        with planner.scene.fingers(opening.approach):
+            why = quick(c.T_base_tcp, "grasp", opening.approach)
         if not why:
-            with planner.scene.fingers(held):
-                why = quick(c.T_base_tcp_place, "place", held)
+            with planner.scene.fingers(opening.held):
+                why = quick(c.T_base_tcp_place, "place", opening.held)
         if why:
             tried.append(describe(c, f"{why} (quick test)"))
             continue
         plans += 1
         try:
             direction = place_direction(c) if callable(place_direction) else place_direction
-            plan = planner.pick_place(q_start, c.T_base_tcp, c.T_base_tcp_place, direction, (held, released))
+            plan = planner.pick_place(q_start, c.T_base_tcp, c.T_base_tcp_place, direction, opening)
         except NoIKSolution as exc:
             tried.append(describe(c, str(exc)))
             if plans >= most_plans:

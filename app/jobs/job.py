@@ -30,7 +30,7 @@ from app.jobs.check import placed
 from app.jobs.choice import NoCandidate, choose, describe
 from app.jobs.clearance import gripper_clear
 from app.jobs.second_look import SecondLookConfig, second_look
-from app.motion.executor import (OBJECT, ExecutionError, ExecutorConfig,
+from app.motion.executor import (OBJECT, ExecutionError, ExecutorConfig, FingerWidths,
                                  Planner, execute, reverse)
 from app.motion.ik import NoIKSolution, reach_failure
 from app.motion.place_line import above_peg, peg_line_direction
@@ -67,6 +67,8 @@ class JobConfig:
 
     method: str = "nift"
     grasp_force: float = 40.0  # N
+    approach_clearance: float = 0.04  # m the fingers open beyond the held width on the approach: fully open
+    # (85 mm), the inner finger of a rim grasp landed on the far wall of a small mug (4 of 50 oracle jobs)
     release_clearance: float = 0.02  # m the fingers open beyond the held width to let go: opening fully
     # inside a bowl swept the far finger into its wall and dragged it off the shelf on the retreat
     demos: Path | None = None  # task directory (default demos/<task>)
@@ -271,9 +273,9 @@ def _imitate(job: _Job, cloud: np.ndarray) -> list:
 def _plan(job: _Job, planner: Planner, options: list, cloud: np.ndarray):
     """The first pair the cell can plan (`app.jobs.choice.choose`), its poses and figures recorded;
     while the object is held the fingers are modelled closed on what the cloud shows between them."""
-    def widths(T_grasp: np.ndarray) -> tuple[float, float]:
-        held = held_width(T_grasp, cloud)
-        return held, held + job.config.release_clearance
+    def widths(T_grasp: np.ndarray) -> FingerWidths:
+        held, c, stroke = held_width(T_grasp, cloud), job.config, job.gripper.stroke
+        return FingerWidths(min(stroke, held + c.approach_clearance), held, min(stroke, held + c.release_clearance))
 
     T_above = above_peg(job.T_base_fixture, job.t.fixture, job.config.executor.peg_clearance)
     if T_above is not job.T_base_fixture:  # a peg: placed clear of it; other fixtures' pairs stay bit for bit
@@ -308,7 +310,7 @@ def _pick(job: _Job, plan) -> None:
     """Approach, close, lift; GraspMissed when nothing is held after closing or after the lift."""
     tolerance = job.config.executor.end_tolerance
     with job.stage("approach"):
-        job.gripper.open()
+        job.gripper.open(width=plan.widths.approach if plan.widths else None)
         execute(job.arm, plan.segment("to pre-grasp"), tolerance)
         execute(job.arm, plan.segment("approach"), tolerance)
     with job.stage("grasp"):
@@ -339,7 +341,7 @@ def _look(job: _Job, planner: Planner, plan, chosen: Candidate, options: list, c
     views, and plan the rest from where the arm is - with the first pair's place when no new one plans.
     Returns the plan to carry on with and where the object should end (`sent`)."""
     T_grasp, width = plan.T_base_grasp, job.gripper.width
-    held, released = width, width + job.config.release_clearance
+    widths = FingerWidths(width, width, width + job.config.release_clearance)
     direction = job.t.place_direction(job.T_base_fixture)
     with job.stage("look"):
         try:
@@ -347,12 +349,12 @@ def _look(job: _Job, planner: Planner, plan, chosen: Candidate, options: list, c
                                      job.config.executor.end_tolerance, job.config.look, job.config.perception)
         except (ValueError, NoIKSolution) as exc:  # nothing seen, or no way to show it: go on with the first look
             job.result.look = {"used": False, "why": str(exc)}
-            return _replanned(job, planner, plan, chosen, cloud, (held, released), direction)
+            return _replanned(job, planner, plan, chosen, cloud, widths, direction)
         starts = np.stack([c.T_base_fixture_seen for c in options if c.grasp_rank == chosen.grasp_rank])
         q, why = job.arm.getActualQ(), "no place"
         for c in job.placer(fused, chosen.T_base_tcp, starts)[: job.config.most_plans]:  # as imitated (no half-turn)
             try:
-                rest = planner.place_from(q, T_grasp, c.motion @ T_grasp, direction, (held, released))
+                rest = planner.place_from(q, T_grasp, c.motion @ T_grasp, direction, widths)
             except NoIKSolution as exc:
                 why = str(exc)
                 continue
@@ -362,7 +364,7 @@ def _look(job: _Job, planner: Planner, plan, chosen: Candidate, options: list, c
             job.result.poses["place"] = _ur(rest.T_base_place)
             return rest, transform_points(c.motion, cloud)
         job.result.look = {"used": False, "new_points": new, "why": why}
-        return _replanned(job, planner, plan, chosen, cloud, (held, released), direction)
+        return _replanned(job, planner, plan, chosen, cloud, widths, direction)
 
 
 def _replanned(job: _Job, planner: Planner, plan, chosen: Candidate, cloud: np.ndarray, widths, direction):

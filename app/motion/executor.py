@@ -61,6 +61,20 @@ class ExecutorConfig:
     sampling: SamplingConfig = SamplingConfig()
 
 
+@dataclass(frozen=True)
+class FingerWidths:
+    """How far apart (m) the fingers stand: on the approach and at the grasp before closing, while the
+    object is held (carry, place), and once it is let go (retreat, clear, home)."""
+
+    approach: float
+    held: float
+    released: float
+
+    @classmethod
+    def fully_open(cls, stroke: float) -> FingerWidths:
+        return cls(stroke, stroke, stroke)
+
+
 class ExecutionError(RuntimeError):
     """A motion did not complete (protective stop, tracking error)."""
 
@@ -75,6 +89,7 @@ class PickPlacePlan:
     seconds: float = 0.0
     travel: float = 0.0  # rad of joint travel, summed
     notes: list[str] = field(default_factory=list)
+    widths: FingerWidths | None = None  # the fingers' openings the plan was checked with (None: fully open)
 
     def segment(self, label: str) -> JointTrajectory:
         return next(s for s in self.segments if s.label == label)
@@ -122,12 +137,12 @@ class Planner:
                            label)
 
     def pick_place(self, q_start: np.ndarray, T_base_grasp: np.ndarray, T_base_place: np.ndarray,
-                   place_direction: np.ndarray, widths: tuple[float, float] | None = None) -> PickPlacePlan:
+                   place_direction: np.ndarray, widths: FingerWidths | None = None) -> PickPlacePlan:
         """The whole motion for a grasp and a place pose of the TCP; `place_direction` (3,) is the
-        unit direction the object comes from onto the fixture (base frame); `widths` (m): the fingers'
-        opening while the object is held (carry, place) and once it is let go (retreat, clear, home) -
-        fully open when not given."""
+        unit direction the object comes from onto the fixture (base frame); `widths`: the fingers'
+        openings on the way (fully open when not given)."""
         start = time.perf_counter()
+        widths = widths or FingerWidths.fully_open(self.scene.geometry.stroke)
         errors = []
         for flip in self._flips_nearest_first(q_start, T_base_grasp):
             try:
@@ -135,7 +150,7 @@ class Planner:
             except NoIKSolution as exc:
                 errors.append(str(exc))
                 continue
-            plan.seconds = time.perf_counter() - start
+            plan.seconds, plan.widths = time.perf_counter() - start, widths
             return plan
         raise NoIKSolution(" / ".join(dict.fromkeys(errors)))
 
@@ -155,31 +170,36 @@ class Planner:
         approaches = [T_grasp @ make_pose(t=offset) for offset in approach_offsets(c)]
 
         def grasp_lines(q: np.ndarray):
-            lift = self._first_line(q, lifts, "lift")  # shorter lifts: the carry that follows is checked
-            return reverse(self._first_line(q, approaches, "approach")), lift
+            with self.scene.fingers(widths.held):
+                lift = self._first_line(q, lifts, "lift")  # shorter lifts: the carry that follows is checked
+            with self.scene.fingers(widths.approach):
+                return reverse(self._first_line(q, approaches, "approach")), lift
 
         # IK at the ends of the lines first: they decide the configuration each line runs in
-        approach, lift = self._first(solutions(self.kin, T_grasp, q_start, self.scene, c.ik, (OBJECT,), "grasp"),
-                                     grasp_lines)
-        to_pre_grasp = self.transit(q_start, approach.q[0], "to pre-grasp")
+        with self.scene.fingers(widths.approach):
+            at_grasp = solutions(self.kin, T_grasp, q_start, self.scene, c.ik, (OBJECT,), "grasp")
+        approach, lift = self._first(at_grasp, grasp_lines)
+        with self.scene.fingers(widths.approach):
+            to_pre_grasp = self.transit(q_start, approach.q[0], "to pre-grasp")
         segments = [to_pre_grasp, approach, lift, *self._place_segments(lift.end, T_grasp, T_place, place_direction,
                                                                         widths)]
         travel = float(sum(np.abs(np.diff(s.q, axis=0)).sum() for s in segments))
         return PickPlacePlan(segments, T_grasp, T_place, travel=travel)
 
     def place_from(self, q_now: np.ndarray, T_base_grasp: np.ndarray, T_base_place: np.ndarray,
-                   place_direction: np.ndarray, widths: tuple[float, float] | None = None) -> PickPlacePlan:
+                   place_direction: np.ndarray, widths: FingerWidths | None = None) -> PickPlacePlan:
         """The rest of a job from q_now with the object held as grasped at T_base_grasp (no half-turn:
         the grasp is made): carry, place, retreat, clear, home (`pick_place` for the arguments)."""
         start = time.perf_counter()
+        widths = widths or FingerWidths.fully_open(self.scene.geometry.stroke)
         segments = self._place_segments(q_now, T_base_grasp, T_base_place, place_direction, widths)
         travel = float(sum(np.abs(np.diff(s.q, axis=0)).sum() for s in segments))
-        return PickPlacePlan(segments, T_base_grasp, T_base_place, time.perf_counter() - start, travel)
+        return PickPlacePlan(segments, T_base_grasp, T_base_place, time.perf_counter() - start, travel, widths=widths)
 
-    def _place_segments(self, q_from, T_grasp, T_place, place_direction, widths) -> list[JointTrajectory]:
+    def _place_segments(self, q_from, T_grasp, T_place, place_direction, widths: FingerWidths) -> list[JointTrajectory]:
         """carry (from q_from, the object held), place, retreat, clear, home."""
         c = self.config
-        held, released = widths or (self.scene.geometry.stroke, self.scene.geometry.stroke)
+        held, released = widths.held, widths.released
         T_pre_place = make_pose(T_place[:3, :3], T_place[:3, 3] + c.place_distance * np.asarray(place_direction))
         T_retreat = T_place @ make_pose(t=[0.0, 0.0, -c.retreat_distance])
 

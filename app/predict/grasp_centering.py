@@ -25,15 +25,19 @@ import numpy as np
 from hardware.gripper_geometry import GripperGeometry
 
 MIN_POINTS = 5  # fewer points between the fingers than this: nothing to centre on
+GAP = 0.008  # m of empty space along the closing axis that parts two layers of material (`held_width`)
+SLICE = 0.005  # m: the slices across the fingers' width that `held_width` measures beside the fingers
 
 
-def swept_mask(T_base_tcp: np.ndarray, cloud: np.ndarray, geometry: GripperGeometry = GripperGeometry()) -> np.ndarray:
-    """(N,) bool: which cloud points lie inside the volume the closing fingers sweep."""
+def swept_mask(T_base_tcp: np.ndarray, cloud: np.ndarray, geometry: GripperGeometry = GripperGeometry(),
+               half_width: float | None = None) -> np.ndarray:
+    """(N,) bool: which cloud points lie inside the volume the closing fingers sweep (`half_width`:
+    how far beside the fingers' middle along x it reaches, half the finger's width by default)."""
     p = (np.asarray(cloud, float).reshape(-1, 3) - T_base_tcp[:3, 3]) @ T_base_tcp[:3, :3]  # (N, 3) TCP frame
     z0 = geometry.palm[2] - geometry.tcp_z  # where the fingers leave the palm, TCP frame
     z1 = z0 + geometry.finger[2]  # the fingertips
-    return ((np.abs(p[:, 0]) < geometry.finger[0] / 2) & (z0 < p[:, 2]) & (p[:, 2] < z1)
-            & (np.abs(p[:, 1]) < geometry.stroke / 2))
+    half = geometry.finger[0] / 2 if half_width is None else half_width
+    return (np.abs(p[:, 0]) < half) & (z0 < p[:, 2]) & (p[:, 2] < z1) & (np.abs(p[:, 1]) < geometry.stroke / 2)
 
 
 def swept_points(T_base_tcp: np.ndarray, cloud: np.ndarray, geometry: GripperGeometry = GripperGeometry()) -> np.ndarray:
@@ -56,11 +60,34 @@ def center_grasp(T_base_tcp: np.ndarray, cloud: np.ndarray, geometry: GripperGeo
 
 
 def held_width(T_base_tcp: np.ndarray, cloud: np.ndarray, geometry: GripperGeometry = GripperGeometry(),
-               margin: float = 0.015, min_points: int = MIN_POINTS) -> float:
+               margin: float = 0.015, min_points: int = MIN_POINTS, beside: float = 0.025) -> float:
     """How far apart (m) the fingers will stand once closed at T_base_tcp: the extent of the swept
     points along the closing axis plus `margin` (one view shows the front of what lies between the
-    fingers), clipped to the stroke; the full stroke when too few points lie between them."""
-    p = swept_points(T_base_tcp, cloud, geometry)
-    if len(p) < min_points:
-        return geometry.stroke
-    return float(min(geometry.stroke, np.ptp(p[:, 1]) + margin))
+    fingers), clipped to the stroke. Where one view shows too few points between the fingers (the
+    rim under them hidden), the points up to `beside` either side of them stand in: of those in
+    the layer nearest the TCP along the closing axis (layers part at gaps over GAP: a mug's far
+    wall is another), the thickest 5 mm slice across the fingers' width (a rim curves through the
+    wider slab); the full stroke when those are too few as well."""
+    cloud = np.asarray(cloud, float).reshape(-1, 3)
+    stroke = geometry.stroke
+    between = swept_points(T_base_tcp, cloud, geometry)  # (K, 3) TCP frame
+    if len(between) >= min_points:
+        return float(min(stroke, np.ptp(between[:, 1]) + margin))
+    near = (cloud - T_base_tcp[:3, 3]) @ T_base_tcp[:3, :3]  # (N, 3) TCP frame
+    near = near[swept_mask(T_base_tcp, cloud, geometry, beside)]
+    if len(near) < min_points:
+        return stroke
+    near = near[_nearest_layer(near[:, 1])]
+    slices = np.floor(near[:, 0] / SLICE)
+    thickest = max(np.ptp(near[slices == k, 1]) for k in np.unique(slices))
+    return float(min(stroke, thickest + margin))
+
+
+def _nearest_layer(y: np.ndarray) -> np.ndarray:
+    """(K,) bool: the values of y (K,) in the run nearest 0 of those that part where sorted neighbours are more than GAP apart."""
+    order = np.argsort(y)
+    runs = np.split(order, np.flatnonzero(np.diff(y[order]) > GAP) + 1)
+    nearest = min(runs, key=lambda run: np.abs(y[run]).min())
+    mask = np.zeros(len(y), bool)
+    mask[nearest] = True
+    return mask
