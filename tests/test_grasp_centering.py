@@ -73,3 +73,25 @@ def test_the_held_width_is_the_walls_thickness_plus_the_margin_and_the_stroke_wi
     assert abs(width - (np.ptp(wall[:, 1]) + 0.015)) < 1e-12 and 0.018 < width <= 0.019
     assert held_width(T, transform_points(T, _slab(-0.04, 0.04, n=400))) == GripperGeometry().stroke  # clipped
     assert held_width(T, transform_points(T, wall[: MIN_POINTS - 1])) == GripperGeometry().stroke
+
+
+def _rim_beside_the_fingers(seed: int) -> np.ndarray:
+    """Points (N, 3), TCP frame, of a 5 mm rim of radius 4 cm curving away from the TCP, seen only
+    13-24 mm beside the fingers' middle (the part under the fingers hidden)."""
+    rng = np.random.default_rng(seed)
+    x = rng.choice([-1, 1], 300) * rng.uniform(0.013, 0.024, 300)
+    r = 0.04 + rng.uniform(-0.0025, 0.0025, 300)  # across the wall
+    y = 0.04 - np.sqrt(r**2 - x**2)  # the rim's centre line passes through the TCP
+    return np.column_stack([x, y, rng.uniform(-0.02, 0.01, 300)])
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_a_hidden_rim_is_measured_beside_the_fingers_and_a_far_wall_is_not_held(seed):
+    T = _pose(seed)
+    rim = _rim_beside_the_fingers(seed)
+    assert len(swept_points(T, transform_points(T, rim))) == 0  # nothing between the fingers
+    width = held_width(T, transform_points(T, rim), margin=0.015)
+    assert 0.015 + 0.005 <= width <= 0.015 + 0.005 + 0.004  # the wall (5 mm) and the curve within one slice
+    far_wall = _slab(0.036, 0.040, n=40, seed=seed) * [0.5, 1.0, 1.0] + [0.019, 0.0, 0.0]  # beside the fingers too
+    assert held_width(T, transform_points(T, np.vstack([rim, far_wall])), margin=0.015) == width
+    assert held_width(T, transform_points(T, rim + [0.0, 0.0, 0.05])) == GripperGeometry().stroke  # past the fingertips

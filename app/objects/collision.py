@@ -8,7 +8,12 @@ file as a compound of convex hulls.
 from __future__ import annotations
 
 import hashlib
-from dataclasses import dataclass
+import json
+import os
+import subprocess
+import sys
+import tempfile
+from dataclasses import asdict, dataclass
 from pathlib import Path
 
 import numpy as np
@@ -43,19 +48,38 @@ def _key(mesh: trimesh.Trimesh, config: DecompositionConfig) -> str:
 
 
 def decompose(mesh: trimesh.Trimesh, config: DecompositionConfig = DecompositionConfig()) -> list[trimesh.Trimesh]:
-    """Convex parts whose union approximates the mesh (CoACD)."""
-    import coacd
-
+    """Convex parts whose union approximates the mesh (CoACD, in a child process: CoACD keeps about
+    3.6 MB of every decomposition for the life of its process, which a cell meeting new objects all
+    day would pile up; docs/limits.md, "Soak")."""
     if not mesh.is_watertight:
         raise ValueError("convex decomposition needs a watertight mesh")
+    with tempfile.TemporaryDirectory(prefix="nift-coacd-") as tmp:
+        source, parts = Path(tmp) / "mesh.npz", Path(tmp) / "parts.obj"
+        np.savez(source, vertices=np.asarray(mesh.vertices, float), faces=np.asarray(mesh.faces, np.int64))
+        code_root = str(Path(__file__).resolve().parents[2])  # the child imports this same code
+        env = {**os.environ, "PYTHONPATH": os.pathsep.join(filter(None, [code_root, os.environ.get("PYTHONPATH")]))}
+        done = subprocess.run([sys.executable, "-m", "app.objects.collision", str(source), str(parts),
+                               json.dumps(asdict(config))], env=env, capture_output=True, text=True)
+        if done.returncode != 0:
+            last = (done.stderr.strip().splitlines() or ["no message"])[-1]
+            raise RuntimeError(f"CoACD's convex decomposition failed (exit {done.returncode}): {last}")
+        return read_parts_obj(parts)
+
+
+def _decompose_here(source: Path, out: Path, config: DecompositionConfig) -> None:
+    """The child's side of `decompose`: CoACD's convex parts of the mesh in `source` (.npz), as an OBJ."""
+    import coacd
+
+    with np.load(source, allow_pickle=False) as data:
+        vertices, faces = data["vertices"], data["faces"]
     coacd.set_log_level("error")
     parts = coacd.run_coacd(
-        coacd.Mesh(np.asarray(mesh.vertices), np.asarray(mesh.faces)),
+        coacd.Mesh(vertices, faces),
         threshold=config.threshold, resolution=config.resolution, preprocess_mode="off",
         mcts_iterations=config.mcts_iterations, mcts_max_depth=config.mcts_depth,
         mcts_nodes=config.mcts_nodes, seed=config.seed,
     )
-    return [trimesh.Trimesh(v, f, process=False).convex_hull for v, f in parts]
+    write_parts_obj([trimesh.Trimesh(v, f, process=False).convex_hull for v, f in parts], out)
 
 
 def write_parts_obj(parts: list[trimesh.Trimesh], path: str | Path) -> Path:
@@ -105,3 +129,7 @@ def visual_model(mesh: trimesh.Trimesh) -> Path:
     if not path.exists():
         write_parts_obj([mesh], path)
     return path
+
+
+if __name__ == "__main__":  # the child process of `decompose`: SOURCE.npz OUT.obj CONFIG-JSON
+    _decompose_here(Path(sys.argv[1]), Path(sys.argv[2]), DecompositionConfig(**json.loads(sys.argv[3])))
