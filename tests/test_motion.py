@@ -97,6 +97,17 @@ def test_chained_ruckig_segments_respect_limits_and_rest_at_waypoints(limits):
         assert np.abs(traj.q[i] - w).max() < 1e-9 and np.abs(traj.qd[i]).max() < 1e-9
 
 
+def test_a_timed_segment_stays_on_the_straight_joint_line_the_planner_checked(limits):
+    """Phase-synchronised Ruckig: every sample lies on the segment q0 + s (q1 - q0), s in [0, 1] rising
+    (time synchronisation bent it: a collision-free planned segment collided once timed)."""
+    rng = np.random.default_rng(2)
+    q0, q1 = HOME_Q + rng.uniform(-1.0, 1.0, 6), HOME_Q + rng.uniform(-1.0, 1.0, 6)
+    traj = through_waypoints([q0, q1], limits)
+    s = (traj.q - q0) @ (q1 - q0) / np.dot(q1 - q0, q1 - q0)  # (T,) where along the segment
+    assert np.abs(traj.q - (q0 + s[:, None] * (q1 - q0))).max() < 1e-9
+    assert np.all(np.diff(s) >= -1e-12) and abs(s[0]) < 1e-12 and abs(s[-1] - 1.0) < 1e-12
+
+
 def test_cartesian_approach_stays_on_the_straight_line(kin, limits, scene):
     T_grasp = make_pose(rotvec_to_matrix([np.pi, 0, 0]), [0.5, 0.05, 0.12])
     q_grasp = solve(kin, T_grasp, HOME_Q, scene)
@@ -360,3 +371,40 @@ def test_a_blocked_approach_line_is_replaced_by_a_shorter_one_that_keeps_the_gra
     only_default = replace(ExecutorConfig(), shorter=(), approach_cone=0.0)
     with pytest.raises(NoIKSolution, match="approach: collision .*gripper_palm-box"):
         Planner(kin, limits, scene, only_default).pick_place(HOME_Q, T_grasp, T_place, np.array([0.0, 0.0, 1.0]))
+
+
+def test_a_blocked_lift_is_replaced_by_one_tilted_off_vertical(kin, limits, scene):
+    """A stand-in obstacle fills the vertical line 4-14 cm above the grasp (within 8 mm of it): the full
+    and the shorter lifts (12, 7.2, 4.8 cm) enter it, one 15 degrees off vertical passes beside it."""
+    from app.motion.executor import Planner
+
+    T_grasp = make_pose(rotvec_to_matrix([np.pi, 0, 0]), [0.5, 0.05, 0.15])
+    T_place = make_pose(rotvec_to_matrix([np.pi, 0, 0]), [0.45, -0.15, 0.15])
+    real = scene.collisions
+
+    def collisions(q, ignore=()):
+        p = kin.fk(q)[:3, 3] - T_grasp[:3, 3]
+        blocked = np.linalg.norm(p[:2]) < 0.008 and 0.04 < p[2] < 0.14
+        return real(q, ignore) + (["gripper_palm-box"] if blocked else [])
+
+    scene.collisions = collisions
+    plan = Planner(kin, limits, scene).pick_place(HOME_Q, T_grasp, T_place, np.array([0.0, 0.0, 1.0]))
+    lift = kin.fk(plan.segment("lift").end)[:3, 3] - plan.T_base_grasp[:3, 3]
+    assert np.degrees(np.arccos(lift[2] / np.linalg.norm(lift))) == pytest.approx(15.0, abs=1e-3)
+    assert np.linalg.norm(lift) == pytest.approx(0.12, abs=1e-4)
+    assert not any("box" in h for q in plan.segment("lift").q for h in collisions(q))
+
+
+def test_line_alternatives_are_the_axis_shorter_and_a_cone_of_six_about_it():
+    from app.motion.executor import ExecutorConfig, line_offsets
+
+    axis = np.array([0.3, -0.5, 0.8]) / np.linalg.norm([0.3, -0.5, 0.8])
+    offsets = np.array(line_offsets(axis, 0.1, ExecutorConfig()))  # (9, 3)
+    np.testing.assert_allclose(offsets[:3], np.outer([1.0, 0.6, 0.4], 0.1 * axis), atol=1e-12)
+    cone = offsets[3:] / 0.1
+    np.testing.assert_allclose(np.linalg.norm(cone, axis=1), 1.0, atol=1e-12)
+    np.testing.assert_allclose(np.degrees(np.arccos(cone @ axis)), 15.0, atol=1e-9)
+    across = cone - np.outer(cone @ axis, axis)
+    turns = np.degrees(np.arccos(np.clip(np.sum(across * np.roll(across, -1, axis=0), axis=1)
+                                         / np.linalg.norm(across, axis=1) ** 2, -1, 1)))
+    np.testing.assert_allclose(turns, 60.0, atol=1e-9)  # six azimuths, evenly spaced

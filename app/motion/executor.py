@@ -5,10 +5,10 @@ Plan (all of it before the arm moves, so an unreachable place fails before the p
     start -> pre-grasp        joint transit (Ruckig), collision-checked against table, fixtures, object hull
     pre-grasp -> grasp        straight TCP line along the tool's approach axis (dense IK); if it fails,
                               the same axis shorter, then 15 degrees off it (`approach_offsets`)
-    grasp -> lift             straight line up (shorter if the full one fails)
+    grasp -> lift             straight line up; if it fails, shorter, then 15 degrees off vertical (`line_offsets`)
     lift -> pre-place         joint transit
     pre-place -> place        straight line along the fixture's approach direction
-    place -> retreat          straight line back along the tool's approach axis
+    place -> retreat          straight line back along the tool's approach axis (the same alternatives)
     retreat -> clear          straight line up
     clear -> home             joint transit
 
@@ -166,7 +166,8 @@ class Planner:
 
     def _pick_place(self, q_start, T_grasp, T_place, place_direction, widths) -> PickPlacePlan:
         c = self.config
-        lifts = [make_pose(T_grasp[:3, :3], T_grasp[:3, 3] + [0.0, 0.0, c.lift_height * k]) for k in (1.0, *c.shorter)]
+        lifts = [make_pose(T_grasp[:3, :3], T_grasp[:3, 3] + up) for up in line_offsets(np.array([0.0, 0.0, 1.0]),
+                                                                                          c.lift_height, c)]
 
         approaches = [T_grasp @ make_pose(t=offset) for offset in approach_offsets(c)]
 
@@ -202,13 +203,13 @@ class Planner:
         c = self.config
         held, released = widths.held, widths.released
         T_pre_place = make_pose(T_place[:3, :3], T_place[:3, 3] + c.place_distance * np.asarray(place_direction))
-        T_retreat = T_place @ make_pose(t=[0.0, 0.0, -c.retreat_distance])
+        retreats = [T_place @ make_pose(t=back) for back in line_offsets(np.array([0.0, 0.0, -1.0]), c.retreat_distance, c)]
 
         def place_lines(q: np.ndarray):
             with self.scene.fingers(held):
                 place = reverse(self.line(q, T_pre_place, "place", (OBJECT,)))
             with self.scene.fingers(released):
-                return place, self.line(q, T_retreat, "retreat", (OBJECT,))
+                return place, self._first_line(q, retreats, "retreat")
 
         with self.scene.fingers(held):
             at_place = solutions(self.kin, T_place, q_from, self.scene, c.ik, (OBJECT,), "place")
@@ -248,16 +249,26 @@ def first_that_works(items: list, attempt):
     raise NoIKSolution(errors[0])
 
 
-def approach_offsets(config: ExecutorConfig) -> list[np.ndarray]:
-    """Pre-grasp positions (3,) in the grasp's TCP frame: `approach_distance` back along the tool
-    axis, then the alternatives that keep the grasp (its pose is unchanged): the same axis at
-    `shorter` fractions of the distance, and directions `approach_cone` off the axis at 6 azimuths."""
-    d = config.approach_distance
-    offsets = [np.array([0.0, 0.0, -d * k]) for k in (1.0, *config.shorter)]
+def line_offsets(axis: np.ndarray, distance: float, config: ExecutorConfig) -> list[np.ndarray]:
+    """Where a straight line may end (3,), relative to where it starts, `distance` along the unit `axis`
+    first, then the alternatives that keep the task: the same axis at `shorter` fractions of the
+    distance, and directions `approach_cone` off the axis at 6 azimuths."""
+    axis = np.asarray(axis, float) / np.linalg.norm(axis)
+    offsets = [axis * distance * k for k in (1.0, *config.shorter)]
     tilt = np.radians(config.approach_cone)
+    e1 = np.cross(axis, [0.0, -1.0, 0.0] if abs(axis[1]) < 0.9 else [-1.0, 0.0, 0.0])
+    e1 /= np.linalg.norm(e1)
+    e2 = np.cross(axis, e1)  # (e1, e2) span the plane across the axis (e1 = -x for the tool's -z)
     for azimuth in np.arange(6 if tilt > 0 else 0) * np.pi / 3:
-        offsets.append(-d * np.array([np.sin(tilt) * np.cos(azimuth), np.sin(tilt) * np.sin(azimuth), np.cos(tilt)]))
+        across = np.cos(azimuth) * e1 - np.sin(azimuth) * e2
+        offsets.append(distance * (np.cos(tilt) * axis + np.sin(tilt) * across))
     return offsets
+
+
+def approach_offsets(config: ExecutorConfig) -> list[np.ndarray]:
+    """Pre-grasp positions (3,) in the grasp's TCP frame: `approach_distance` back along the tool axis,
+    then the alternatives (`line_offsets`); the grasp pose itself is unchanged."""
+    return line_offsets(np.array([0.0, 0.0, -1.0]), config.approach_distance, config)
 
 
 def reverse(traj: JointTrajectory) -> JointTrajectory:
