@@ -205,21 +205,24 @@ class Planner:
         T_pre_place = make_pose(T_place[:3, :3], T_place[:3, 3] + c.place_distance * np.asarray(place_direction))
         retreats = [T_place @ make_pose(t=back) for back in line_offsets(np.array([0.0, 0.0, -1.0]), c.retreat_distance, c)]
 
+        def retreat_and_clear(q: np.ndarray, T_retreat: np.ndarray):
+            retreat = self.line(q, T_retreat, "retreat", (OBJECT,))
+            T_clear = self.kin.fk(retreat.end)
+            T_clear[2, 3] += c.lift_height
+            return retreat, self.line(retreat.end, T_clear, "clear", (OBJECT,))
+
         def place_lines(q: np.ndarray):
             with self.scene.fingers(held):
                 place = reverse(self.line(q, T_pre_place, "place", (OBJECT,)))
-            with self.scene.fingers(released):
-                return place, self._first_line(q, retreats, "retreat")
+            with self.scene.fingers(released):  # a retreat that leaves no way up is no retreat
+                return place, *first_that_works(retreats, lambda T: retreat_and_clear(q, T))
 
         with self.scene.fingers(held):
             at_place = solutions(self.kin, T_place, q_from, self.scene, c.ik, (OBJECT,), "place")
-        place, retreat = self._first(at_place, place_lines)
+        place, retreat, clear = self._first(at_place, place_lines)
         with self.scene.holding(OBJECT, T_grasp), self.scene.fingers(held):  # the carried object must clear the cell too
             carry = self.transit(q_from, place.q[0], "carry", ignore=(OBJECT,))
-        T_clear = self.kin.fk(retreat.end)
-        T_clear[2, 3] += c.lift_height
         with self.scene.fingers(released):
-            clear = self.line(retreat.end, T_clear, "clear", ignore=(OBJECT,))
             home = self.transit(clear.end, np.asarray(c.home_q), "home", ignore=(OBJECT,))
         return [carry, place, retreat, clear, home]
 
