@@ -97,17 +97,6 @@ def test_chained_ruckig_segments_respect_limits_and_rest_at_waypoints(limits):
         assert np.abs(traj.q[i] - w).max() < 1e-9 and np.abs(traj.qd[i]).max() < 1e-9
 
 
-def test_a_timed_segment_stays_on_the_straight_joint_line_the_planner_checked(limits):
-    """Phase-synchronised Ruckig: every sample lies on the segment q0 + s (q1 - q0), s in [0, 1] rising
-    (time synchronisation bent it: a collision-free planned segment collided once timed)."""
-    rng = np.random.default_rng(2)
-    q0, q1 = HOME_Q + rng.uniform(-1.0, 1.0, 6), HOME_Q + rng.uniform(-1.0, 1.0, 6)
-    traj = through_waypoints([q0, q1], limits)
-    s = (traj.q - q0) @ (q1 - q0) / np.dot(q1 - q0, q1 - q0)  # (T,) where along the segment
-    assert np.abs(traj.q - (q0 + s[:, None] * (q1 - q0))).max() < 1e-9
-    assert np.all(np.diff(s) >= -1e-12) and abs(s[0]) < 1e-12 and abs(s[-1] - 1.0) < 1e-12
-
-
 def test_cartesian_approach_stays_on_the_straight_line(kin, limits, scene):
     T_grasp = make_pose(rotvec_to_matrix([np.pi, 0, 0]), [0.5, 0.05, 0.12])
     q_grasp = solve(kin, T_grasp, HOME_Q, scene)

@@ -9,9 +9,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from ruckig import Trajectory
 
 from hardware.interfaces import JointLimits
-from hardware.motion_profile import LineProfile, ruckig_profile
+from hardware.motion_profile import ruckig_profile
 
 SAMPLE_PERIOD = 1.0 / 250.0  # s between trajectory samples streamed to the arm
 
@@ -34,8 +35,8 @@ class JointTrajectory:
         return self.q[-1]
 
 
-def sample_profile(profile: LineProfile, period: float = SAMPLE_PERIOD) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(times (T,), positions (T, D), velocities (T, D)) of a profile, both ends included."""
+def sample_profile(profile: Trajectory, period: float = SAMPLE_PERIOD) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(times (T,), positions (T, D), velocities (T, D)) of a Ruckig trajectory, both ends included."""
     n = max(2, int(np.ceil(profile.duration / period)) + 1)
     times = np.linspace(0.0, profile.duration, n)
     states = [profile.at_time(t) for t in times]
