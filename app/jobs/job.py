@@ -69,8 +69,9 @@ class JobConfig:
     grasp_force: float = 40.0  # N
     approach_clearance: float = 0.04  # m the fingers open beyond the held width on the approach: fully open
     # (85 mm), the inner finger of a rim grasp landed on the far wall of a small mug (4 of 50 oracle jobs)
-    release_clearance: float = 0.02  # m the fingers open beyond the held width to let go: opening fully
-    # inside a bowl swept the far finger into its wall and dragged it off the shelf on the retreat
+    release_clearance: float = 0.04  # m the fingers open beyond the held width to let go: fully open,
+    # the far finger inside a bowl swept its wall on the retreat; at 2 cm a bowl that had turned 4-5
+    # degrees in the grasp still leant on a finger and was dragged off the shelf
     demos: Path | None = None  # task directory (default demos/<task>)
     center_grasp: bool = True  # centre the grasp between the fingers and a hang on the peg (app.predict.grasp_centering, app.predict.peg_centering)
     align_grasp: bool = False  # turn the grasp square to the wall between the fingers (app.predict.grasp_alignment): off, as
