@@ -164,3 +164,23 @@ def test_a_small_mug_is_approached_with_the_fingers_open_only_as_wide_as_the_rim
     assert not wide.success and wide.failed_stage == "approach" and "protective stop" in wide.reason
     result = _sim(spec)
     assert result.success, result.reason
+
+
+@pytest.mark.slow
+def test_fingers_that_do_not_open_end_the_job_at_release_before_the_retreat(monkeypatch):
+    """A gripper jammed on the object (its fingers stay where they are when asked to let go): the job
+    fails at release saying so, and the arm does not retreat with the object still held."""
+    from hardware.sim.gripper import SimGripper
+
+    opened = SimGripper.open
+
+    def jammed(self, speed=0.1, width=None):
+        if width is None:
+            return opened(self, speed, width)  # the approach and the safe stop open fully
+        self._detected = False  # a real gripper reports where its fingers stopped
+
+    monkeypatch.setattr(SimGripper, "open", jammed)
+    result = _sim(JobSpec(task("bottle"), seed=3))
+    assert not result.success and result.failed_stage == "release", result.reason
+    assert "the fingers opened to" in result.reason and "still be held" in result.reason
+    assert "retreat" not in result.seconds

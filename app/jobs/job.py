@@ -59,6 +59,7 @@ STAGES = ("capture", "perceive", "imitate", "plan", "approach", "grasp", "lift",
 JOB_IMITATION = ImitationConfig(prune_every=10, explore_points=128, refine_points=256, patience=25, iterations=200,
                                keep=3, min_weight=1e-3, diverse=True, candidates=CandidateConfig(margin=0.3, most=8))
 MOVED = 0.01  # m: a cloud whose centroid moved more than this since the last look is imitated again
+RELEASE_TOLERANCE = 0.005  # m: fingers that stop farther than this short of the opening asked did not let go
 
 
 @dataclass(frozen=True)
@@ -384,7 +385,11 @@ def _place(job: _Job, plan, sent: np.ndarray) -> None:
     with job.stage("place"):
         execute(job.arm, plan.segment("place"), tolerance)
     with job.stage("release"):
-        job.gripper.open(width=min(job.gripper.stroke, job.gripper.width + job.config.release_clearance))
+        asked = min(job.gripper.stroke, job.gripper.width + job.config.release_clearance)
+        job.gripper.open(width=asked)
+        if job.gripper.width < asked - RELEASE_TOLERANCE:  # retreating now would carry the object away
+            raise JobFailed(f"release: the fingers opened to {1000 * job.gripper.width:.1f} mm of the "
+                            f"{1000 * asked:.1f} mm asked; the object may still be held")
     with job.stage("retreat"):
         for name in ("retreat", "clear", "home"):
             execute(job.arm, plan.segment(name), tolerance)
