@@ -20,7 +20,7 @@ from app.objects.library import LibraryObject
 from app.predict.methods import ORACLE
 from app.sim.cell import SimCell
 from app.sim.judges import resting_verdict
-from app.sim.oracle import teacher_prediction
+from app.sim.oracle import REVOLUTION, TURNS, teacher_prediction
 from app.sim.snapshots import save_strip, snapshot
 from app.sim.spawn import SCALE_RANGE, SpawnedObject, release, spawn
 from app.tasks.task import Task
@@ -93,9 +93,11 @@ def start_job(cell: SimCell, spec: JobSpec) -> SpawnedObject:
 
 
 def teacher_predictor(cell: SimCell, obj: SpawnedObject, t: Task) -> Predictor:
-    """The oracle's poses for the object where it is when the job asks (after a miss it may have moved)."""
+    """The oracle's poses for the object where it is when the job asks (after a miss it may have moved);
+    for a body of revolution, its grasp turned about the object's axis too (`app.sim.oracle`)."""
     T_base_fixture = cell.config.fixture_pose(t.fixture)
-    return lambda cloud: teacher_prediction(t, obj.mesh, obj.scale, cell.world.pose(obj.body), T_base_fixture)
+    turns = TURNS if t.category in REVOLUTION else 1
+    return lambda cloud: teacher_prediction(t, obj.mesh, obj.scale, cell.world.pose(obj.body), T_base_fixture, turns)
 
 
 def run_sim_job(cell: SimCell, scene: PlanningScene, T_base_cam: np.ndarray, spec: JobSpec,
