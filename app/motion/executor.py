@@ -203,7 +203,8 @@ class Planner:
         c = self.config
         held, released = widths.held, widths.released
         T_pre_place = make_pose(T_place[:3, :3], T_place[:3, 3] + c.place_distance * np.asarray(place_direction))
-        retreats = [T_place @ make_pose(t=back) for back in line_offsets(np.array([0.0, 0.0, -1.0]), c.retreat_distance, c)]
+        backs = line_offsets(np.array([0.0, 0.0, -1.0]), c.retreat_distance, c)  # in the TCP frame at the place
+        retreats = [T_place @ make_pose(t=back) for back in backs]
 
         def retreat_and_clear(q: np.ndarray, T_retreat: np.ndarray):
             retreat = self.line(q, T_retreat, "retreat", (OBJECT,))

@@ -84,7 +84,8 @@ def held_width(T_base_tcp: np.ndarray, cloud: np.ndarray, geometry: GripperGeome
 
 
 def _nearest_layer(y: np.ndarray) -> np.ndarray:
-    """(K,) bool: the values of y (K,) in the run nearest 0 of those that part where sorted neighbours are more than GAP apart."""
+    """(K,) bool: the values of y (K,) in the run nearest 0, runs parting where sorted neighbours are
+    more than GAP apart."""
     order = np.argsort(y)
     runs = np.split(order, np.flatnonzero(np.diff(y[order]) > GAP) + 1)
     nearest = min(runs, key=lambda run: np.abs(y[run]).min())
