@@ -151,7 +151,7 @@ class Planner:
             except NoIKSolution as exc:
                 errors.append(str(exc))
                 continue
-            plan.seconds, plan.widths = time.perf_counter() - start, widths
+            plan.seconds = time.perf_counter() - start
             return plan
         raise NoIKSolution(" / ".join(dict.fromkeys(errors)))
 
@@ -186,7 +186,7 @@ class Planner:
         segments = [to_pre_grasp, approach, lift, *self._place_segments(lift.end, T_grasp, T_place, place_direction,
                                                                         widths)]
         travel = float(sum(np.abs(np.diff(s.q, axis=0)).sum() for s in segments))
-        return PickPlacePlan(segments, T_grasp, T_place, travel=travel)
+        return PickPlacePlan(segments, T_grasp, T_place, travel=travel, widths=widths)
 
     def place_from(self, q_now: np.ndarray, T_base_grasp: np.ndarray, T_base_place: np.ndarray,
                    place_direction: np.ndarray, widths: FingerWidths | None = None) -> PickPlacePlan:

@@ -49,7 +49,7 @@ def _key(mesh: trimesh.Trimesh, config: DecompositionConfig) -> str:
 
 def decompose(mesh: trimesh.Trimesh, config: DecompositionConfig = DecompositionConfig()) -> list[trimesh.Trimesh]:
     """Convex parts whose union approximates the mesh (CoACD, in a child process: CoACD keeps about
-    3.6 MB of every decomposition for the life of its process, which a cell meeting new objects all
+    6 MB of every decomposition for the life of its process, which a cell meeting new objects all
     day would pile up; docs/limits.md, "Soak")."""
     if not mesh.is_watertight:
         raise ValueError("convex decomposition needs a watertight mesh")
@@ -66,20 +66,25 @@ def decompose(mesh: trimesh.Trimesh, config: DecompositionConfig = Decomposition
         return read_parts_obj(parts)
 
 
-def _decompose_here(source: Path, out: Path, config: DecompositionConfig) -> None:
-    """The child's side of `decompose`: CoACD's convex parts of the mesh in `source` (.npz), as an OBJ."""
+def run_coacd(mesh: trimesh.Trimesh, config: DecompositionConfig = DecompositionConfig()) -> list[trimesh.Trimesh]:
+    """CoACD's convex parts of a watertight mesh, in this process (`decompose` runs it in a child)."""
     import coacd
 
-    with np.load(source, allow_pickle=False) as data:
-        vertices, faces = data["vertices"], data["faces"]
     coacd.set_log_level("error")
     parts = coacd.run_coacd(
-        coacd.Mesh(vertices, faces),
+        coacd.Mesh(np.asarray(mesh.vertices), np.asarray(mesh.faces)),
         threshold=config.threshold, resolution=config.resolution, preprocess_mode="off",
         mcts_iterations=config.mcts_iterations, mcts_max_depth=config.mcts_depth,
         mcts_nodes=config.mcts_nodes, seed=config.seed,
     )
-    write_parts_obj([trimesh.Trimesh(v, f, process=False).convex_hull for v, f in parts], out)
+    return [trimesh.Trimesh(v, f, process=False).convex_hull for v, f in parts]
+
+
+def _decompose_here(source: Path, out: Path, config: DecompositionConfig) -> None:
+    """The child's side of `decompose`: CoACD's convex parts of the mesh in `source` (.npz), as an OBJ."""
+    with np.load(source, allow_pickle=False) as data:
+        mesh = trimesh.Trimesh(data["vertices"], data["faces"], process=False)
+    write_parts_obj(run_coacd(mesh, config), out)
 
 
 def write_parts_obj(parts: list[trimesh.Trimesh], path: str | Path) -> Path:
