@@ -82,6 +82,20 @@ def test_scene_flags_the_table_and_not_home(scene):
     assert any(hit.endswith("-table") for hit in scene.collisions(down))
 
 
+def test_the_planners_quick_check_agrees_with_the_full_contact_list(kin, scene):
+    rng = np.random.default_rng(3)
+    scene.add_cloud("box", rng.uniform([0.35, -0.2, 0.0], [0.55, 0.0, 0.12], (400, 3)))
+    try:
+        qs = [HOME_Q + rng.uniform(-1.5, 1.5, 6) for _ in range(300)]
+        hits = [scene.collisions(q) for q in qs]
+        assert 50 < sum(map(bool, hits)) < 250  # both kinds of state are in the sample
+        assert any(any(h.endswith("-box") for h in hs) for hs in hits)
+        assert [scene.is_free(q) for q in qs] == [not hs for hs in hits]
+        assert [scene.is_free(q, ("box",)) for q in qs] == [not [h for h in hs if not h.endswith("-box")] for hs in hits]
+    finally:
+        scene.remove("box")
+
+
 def test_chained_ruckig_segments_respect_limits_and_rest_at_waypoints(limits):
     rng = np.random.default_rng(1)
     waypoints = [HOME_Q + rng.uniform(-1.0, 1.0, 6) for _ in range(4)]
@@ -206,6 +220,30 @@ def test_sampling_planner_goes_around_an_obstacle_on_the_direct_path(kin, scene)
         assert not any(scene.collisions(q) for q in densify(path, 0.005))  # every state, at the scene's margin
         assert np.array_equal(plan_joint_path(scene, q0, q1), path)  # seeded: the same problem, the same path
         assert not np.array_equal(plan_joint_path(scene, q0, q1, config=SamplingConfig(seed=2)), path)
+    finally:
+        scene.remove("pillar")
+
+
+def test_sampling_planner_refuses_a_colliding_goal_at_once_and_names_the_contact(kin, scene):
+    import time
+
+    from app.motion.sampling import NoPath, plan_joint_path
+
+    q0, q1, pillar = _pillar_between_two_reaches(kin)
+    scene.add_cloud("pillar", pillar)
+    try:
+        inside = q1.copy()
+        for q in np.linspace(q0, q1, 50):  # a state on the straight path that is in the pillar
+            if scene.collisions(q):
+                inside = q
+                break
+        assert scene.collisions(inside)
+        start = time.perf_counter()
+        with pytest.raises(NoPath, match="goal collides .*pillar"):
+            plan_joint_path(scene, q0, inside)  # RRT-Connect alone would sample for its 2 s
+        assert time.perf_counter() - start < 0.5
+        with pytest.raises(NoPath, match="start collides .*pillar"):
+            plan_joint_path(scene, inside, q1)
     finally:
         scene.remove("pillar")
 

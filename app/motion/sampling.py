@@ -9,7 +9,6 @@ motion again, where `densify` helps when a timed segment strays from its straigh
 """
 from __future__ import annotations
 
-import gc
 from dataclasses import dataclass
 
 import numpy as np
@@ -46,8 +45,13 @@ def _ompl():
 
 def plan_joint_path(scene: PlanningScene, q0: np.ndarray, q1: np.ndarray, ignore: tuple[str, ...] = (),
                     config: SamplingConfig = SamplingConfig()) -> np.ndarray:
-    """Collision-free joint waypoints (K, 6) from q0 to q1, both included, or NoPath."""
+    """Collision-free joint waypoints (K, 6) from q0 to q1, both included, or NoPath - at once when an
+    end collides (RRT-Connect would sample towards an invalid goal until its time is up)."""
     q0, q1 = np.asarray(q0, float), np.asarray(q1, float)
+    for end, q in (("start", q0), ("goal", q1)):
+        hits = scene.collisions(q, ignore)
+        if hits:
+            raise NoPath(f"the transit's {end} collides ({', '.join(hits[:3])})")
     ob, og, ou = _ompl()
     ou.RNG.setSeed(config.seed)
     dof = len(q0)
@@ -59,7 +63,7 @@ def plan_joint_path(scene: PlanningScene, q0: np.ndarray, q1: np.ndarray, ignore
         bounds.setHigh(j, float(high[j]))
     space.setBounds(bounds)
     setup = og.SimpleSetup(space)
-    setup.setStateValidityChecker(lambda state: not scene.collisions(_array(state, dof), ignore))
+    setup.setStateValidityChecker(lambda state: scene.is_free(_array(state, dof), ignore))
     info = setup.getSpaceInformation()
     info.setStateValidityCheckingResolution(config.resolution / space.getMaximumExtent())
     planner = og.RRTConnect(info)
@@ -79,8 +83,7 @@ def plan_joint_path(scene: PlanningScene, q0: np.ndarray, q1: np.ndarray, ignore
         simplifier.ropeShortcutPath(path)
         waypoints = np.array([_array(path.getState(i), dof) for i in range(path.getStateCount())])  # (K, 6)
     finally:
-        del setup, planner, info, start, goal, space, bounds
-        gc.collect()  # release OMPL's objects now: left to interpreter exit, nanobind reports them as leaks
+        del setup, planner, info, start, goal, space, bounds  # OMPL's objects go now, not at exit
     waypoints[0], waypoints[-1] = q0, q1
     return waypoints
 

@@ -22,6 +22,7 @@ on a held object, whose open fingers would reach 4 cm to each side into a rack's
 from __future__ import annotations
 
 import itertools
+from collections.abc import Iterator
 from contextlib import contextmanager
 
 import numpy as np
@@ -180,20 +181,26 @@ class PlanningScene:
     def collisions(self, q: np.ndarray, ignore: tuple[str, ...] = ()) -> list[str]:
         """Names of the contacts ('forearm_link-table', 'wrist_3_link-upper_arm_link', ...) at q, nearer
         than the margin; obstacles named in `ignore` are skipped."""
+        return list(self._contacts(q, ignore))
+
+    def is_free(self, q: np.ndarray, ignore: tuple[str, ...] = ()) -> bool:
+        """No contact at q (`collisions` is empty), stopping at the first one found: the planner's check."""
+        return next(self._contacts(q, ignore), None) is None
+
+    def _contacts(self, q: np.ndarray, ignore: tuple[str, ...]) -> Iterator[str]:
+        """The contacts of `collisions`, one at a time: obstacles (one query per obstacle for all the
+        robot's links), then the self pairs, then the carried object."""
         self.set_q(q)
-        found = []
         for obstacle, body in self.obstacles.items():
             if obstacle in ignore:
                 continue
-            for link, index in self.links.items():
-                if obstacle == "table" and link in ON_TABLE:
-                    continue
-                if self._near(self.robot, body, index, -1):
-                    found.append(f"{link}-{obstacle}")
+            near = self._links_near(body)
+            yield from (f"{link}-{obstacle}" for link, index in self.links.items()
+                        if index in near and not (obstacle == "table" and link in ON_TABLE))
         for a, b in self.self_pairs:
             if self._near(self.robot, self.robot, self.links[a], self.links[b]):
-                found.append(f"{a}-{b}")
-        return found + self._held_collisions(q, ignore)
+                yield f"{a}-{b}"
+        yield from self._held_collisions(q, ignore)
 
     def _held_collisions(self, q: np.ndarray, ignore: tuple[str, ...]) -> list[str]:
         """What the carried object hits at q: obstacles not ignored, arm links but the gripper's."""
@@ -203,6 +210,10 @@ class PlanningScene:
         set_pose(self.client, body, self.kinematics.fk(q) @ T_tcp_body)
         found = [f"{HELD}-{name}" for name in self._obstacles_near(body, ignore)]
         return found + [f"{HELD}-{link}" for link in ARM_LINKS if self._near(body, self.robot, -1, self.links[link])]
+
+    def _links_near(self, body: int) -> set[int]:
+        """Indices of the robot's links within the margin of a body: one query for all of them."""
+        return {c[3] for c in p.getClosestPoints(self.robot, body, self.margin, physicsClientId=self.client)}
 
     def _near(self, body_a: int, body_b: int, link_a: int, link_b: int) -> bool:
         return len(p.getClosestPoints(body_a, body_b, self.margin, link_a, link_b, physicsClientId=self.client)) > 0
