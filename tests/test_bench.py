@@ -204,9 +204,11 @@ def test_a_results_line_that_is_not_a_row_is_named(tmp_path):
 
 def test_memory_growth_across_refreshes_sees_what_stays_and_not_the_sawtooth():
     from app.bench.memory import growth_across_refreshes, growth_mb_per_job
+    from app.sim.jobs import fresh_client_before
 
     every, kept, freed = 10, 0.5, 2.0  # MiB a job no refresh frees / a refresh frees
     rss = [700 + kept * i + freed * (i % every) for i in range(60)]  # a sawtooth on a rising floor
-    assert abs(growth_across_refreshes(rss, every) - kept) < 1e-9
+    fresh = [0] + [i for i in range(60) if fresh_client_before(i, every)]  # as run_series refreshes
+    assert abs(growth_across_refreshes(rss, fresh) - kept) < 1e-9
     assert abs(growth_mb_per_job(rss) - kept) > 0.1  # the second-half slope mixes both
-    assert growth_across_refreshes(rss[:every], every) is None  # one fresh client: no slope
+    assert growth_across_refreshes(rss[:every], [0]) is None  # one fresh client: no slope

@@ -25,11 +25,10 @@ def growth_mb_per_job(rss: list[float]) -> float:
     return float(np.polyfit(np.arange(len(tail)), tail, 1)[0])
 
 
-def growth_across_refreshes(rss: list[float], every: int) -> float | None:
-    """Slope (MiB a job) through the samples taken just after each fresh physics client (jobs 0,
-    every, 2 every, ...): what no refresh frees, without the sawtooth of the shapes a refresh
-    does free. None with fewer than two such samples."""
-    at = np.arange(0, len(rss), every) if every > 0 else np.array([], int)
-    if len(at) < 2:
+def growth_across_refreshes(rss: list[float], fresh: list[int]) -> float | None:
+    """Slope (MiB a job) through the samples rss[i] of the jobs i that ran first on a fresh physics
+    client: what no refresh frees, without the sawtooth of the shapes a refresh does free. None
+    with fewer than two such samples."""
+    if len(fresh) < 2:
         return None
-    return float(np.polyfit(at, np.asarray(rss, float)[at], 1)[0])
+    return float(np.polyfit(fresh, np.asarray(rss, float)[fresh], 1)[0])

@@ -132,6 +132,11 @@ def run_sim_job(cell: SimCell, scene: PlanningScene, T_base_cam: np.ndarray, spe
 REFRESH_EVERY = 20  # jobs between fresh physics clients in a series (memory: docs/limits.md, "Soak")
 
 
+def fresh_client_before(i: int, every: int = REFRESH_EVERY) -> bool:
+    """Whether a series (`run_series`) starts the cell and the scene on fresh clients before its job i."""
+    return bool(i and every and i % every == 0)
+
+
 def run_series(cell: SimCell, scene: PlanningScene, T_base_cam: np.ndarray, specs: list[JobSpec],
                config: JobConfig = JobConfig(), on_result: Callable[[JobResult], None] = lambda r: None,
                record: Path | None = None, refresh_every: int = REFRESH_EVERY) -> list[JobResult]:
@@ -140,7 +145,7 @@ def run_series(cell: SimCell, scene: PlanningScene, T_base_cam: np.ndarray, spec
     which is what frees the shapes of the objects spawned so far."""
     results = []
     for i, spec in enumerate(specs):
-        if i and refresh_every and i % refresh_every == 0:
+        if fresh_client_before(i, refresh_every):
             cell.refresh()
             scene.rebuild()
         path = record if record is None or len(specs) == 1 else record.with_name(f"{record.stem}-{i:02d}{record.suffix}")
