@@ -57,7 +57,8 @@ STAGES = ("capture", "perceive", "imitate", "plan", "approach", "grasp", "lift",
 # points and refine on 256, leave out points of negligible weight, stop after 25 steps without gain,
 # decay over 200 steps (docs/jobs.md, "Imitation time").
 JOB_IMITATION = ImitationConfig(prune_every=10, explore_points=128, refine_points=256, patience=25, iterations=200,
-                               keep=3, min_weight=1e-3, diverse=True, candidates=CandidateConfig(margin=0.3, most=8))
+                               keep=3, min_weight=1e-3, diverse=True, candidates=CandidateConfig(margin=0.3, most=8),
+                               grasp_start_turns=2)
 MOVED = 0.01  # m: a cloud whose centroid moved more than this since the last look is imitated again
 RELEASE_TOLERANCE = 0.005  # m: fingers that stop farther than this short of the opening asked did not let go
 

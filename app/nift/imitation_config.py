@@ -12,7 +12,7 @@ DEMO_MATCHES = ("mean", "nearest")
 MAX_INITS = 1000
 INTEGER_RANGES = (("inits", 1, MAX_INITS), ("iterations", 1, 100_000), ("patience", 1, 100_000),
                   ("prune_every", 0, 100_000), ("keep", 1, MAX_INITS), ("explore_points", 0, 100_000),
-                  ("refine_points", 0, 100_000), ("seed", 0, 2**32 - 1))
+                  ("refine_points", 0, 100_000), ("grasp_start_turns", 0, 360), ("seed", 0, 2**32 - 1))
 REAL_RANGES = (("lr", 0.0, 10.0), ("lr_final_ratio", 0.0, 1.0))  # (low, high]
 
 
@@ -51,6 +51,10 @@ class ImitationConfig:
     # margin; `diverse` pruning keeps one pose of each basin before a second one of the same - off
     # here, so the teleported tables stay as measured, on in the cell's schedule (app.jobs.job.JOB_IMITATION).
     diverse: bool = False
+    # Grasp starts (our addition, `app.predict.grasp_starts`): also start the grasp's imitation from every
+    # demo's grasp relative to the top of its cloud, turned about the vertical this many times (0 = off,
+    # as in the teleported tables; the cell's schedule uses 2).
+    grasp_start_turns: int = 0
     candidates: CandidateConfig = field(default_factory=CandidateConfig)
     seed: int = 0
 

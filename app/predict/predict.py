@@ -40,6 +40,7 @@ from app.predict.feasibility import (Reach, all_of, carries_like_demos,
                                      demo_carries, grips_something, reaches)
 from app.predict.grasp_alignment import align_grasp
 from app.predict.grasp_centering import center_grasp
+from app.predict.grasp_starts import gravity_starts
 from app.predict.methods import check_method
 from app.predict.peg_centering import center_on_peg
 from app.tasks.library import (DEMOS_DIR, STAGES, stage_anchor, task_demos,
@@ -143,8 +144,9 @@ def _predict(t: Task, cloud: np.ndarray, method: str, T_base_fixture: np.ndarray
     field = load_field(field_override(feature, nif) or FEATURES[feature])  # once for both templates
     reach = reachable if feasible else None
     grips = all_of(grips_something(cloud), reaches(reach) if reach else None) if feasible else None
-    grasp = imitate(templates["grasp"], cloud, config, field, grips)
-    demos_carried = demo_carries(task_demos(directory)) if feasible or carried_grasps else None
+    demos = task_demos(directory)
+    grasp = imitate(templates["grasp"], cloud, config, field, grips, gravity_starts(demos, cloud, config.grasp_start_turns))
+    demos_carried = demo_carries(demos) if feasible or carried_grasps else None
     carried = demos_carried if feasible else None
     carry = carries_like_demos(grasp.T, carried) if feasible else None
     starts = carried_places(grasp.candidates, demos_carried) if carried_grasps else None
