@@ -3,8 +3,8 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from app.predict.grasp_starts import about_vertical, gravity_starts, top_centre
-from hardware.se3 import make_pose, random_rotations
+from app.predict.grasp_starts import gravity_starts, top_centre
+from hardware.se3 import make_pose, random_rotations, rotvec_to_matrix
 
 
 def _demos(rng: np.random.Generator, n: int = 3) -> list[SimpleNamespace]:
@@ -32,7 +32,7 @@ def test_starts_move_with_the_cloud_and_turn_about_its_top_centre() -> None:
     np.testing.assert_allclose(moved[:, :3, :3], S[:, :3, :3], atol=1e-12)
     np.testing.assert_allclose(moved[:, :3, 3], S[:, :3, 3] + shift, atol=1e-12)
     a = top_centre(cloud)
-    about_a = make_pose(np.eye(3), a) @ about_vertical(np.pi / 2) @ make_pose(np.eye(3), -a)
+    about_a = make_pose(np.eye(3), a) @ make_pose(rotvec_to_matrix([0.0, 0.0, np.pi / 2])) @ make_pose(np.eye(3), -a)
     np.testing.assert_allclose(S[1], about_a @ S[0], atol=1e-12)  # the next turn: a quarter turn about the vertical
     assert not np.allclose(S[1], S[0])
 

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from hardware.se3 import make_pose
+from hardware.se3 import make_pose, rotvec_to_matrix
 
 
 def top_centre(cloud: np.ndarray) -> np.ndarray:
@@ -21,18 +21,12 @@ def top_centre(cloud: np.ndarray) -> np.ndarray:
     return np.array([cloud[:, 0].mean(), cloud[:, 1].mean(), cloud[:, 2].max()])
 
 
-def about_vertical(angle: float) -> np.ndarray:
-    """(4, 4) a turn by `angle` (rad) about the base's z axis."""
-    c, s = np.cos(angle), np.sin(angle)
-    return make_pose(np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]]), np.zeros(3))
-
-
 def gravity_starts(demos, cloud: np.ndarray, turns: int) -> np.ndarray:
     """(D turns, 4, 4) the starts S_{d,k} of the module doc for `demos` (`app.tasks.demo.Demo`s,
     base-frame clouds and grasps) and a target cloud (N, 3); none for turns == 0."""
     if turns == 0:
         return np.zeros((0, 4, 4))
-    to_target = make_pose(np.eye(3), top_centre(np.asarray(cloud, float)))
-    spins = [about_vertical(2 * np.pi * k / turns) for k in range(turns)]
-    return np.stack([to_target @ R @ make_pose(np.eye(3), -top_centre(np.asarray(d.cloud, float))) @ d.T_base_tcp
+    to_target = make_pose(t=top_centre(np.asarray(cloud, float)))
+    spins = [make_pose(rotvec_to_matrix([0.0, 0.0, 2 * np.pi * k / turns])) for k in range(turns)]
+    return np.stack([to_target @ R @ make_pose(t=-top_centre(np.asarray(d.cloud, float))) @ d.T_base_tcp
                      for d in demos for R in spins])

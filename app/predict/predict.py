@@ -144,8 +144,9 @@ def _predict(t: Task, cloud: np.ndarray, method: str, T_base_fixture: np.ndarray
     field = load_field(field_override(feature, nif) or FEATURES[feature])  # once for both templates
     reach = reachable if feasible else None
     grips = all_of(grips_something(cloud), reaches(reach) if reach else None) if feasible else None
-    demos = task_demos(directory)
-    grasp = imitate(templates["grasp"], cloud, config, field, grips, gravity_starts(demos, cloud, config.grasp_start_turns))
+    demos = task_demos(directory) if config.grasp_start_turns or feasible or carried_grasps else None
+    begin = gravity_starts(demos, cloud, config.grasp_start_turns) if config.grasp_start_turns else None
+    grasp = imitate(templates["grasp"], cloud, config, field, grips, begin)
     demos_carried = demo_carries(demos) if feasible or carried_grasps else None
     carried = demos_carried if feasible else None
     carry = carries_like_demos(grasp.T, carried) if feasible else None
