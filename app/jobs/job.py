@@ -345,19 +345,20 @@ def _look(job: _Job, planner: Planner, plan, chosen: Candidate, options: list, c
     Returns the plan to carry on with and where the object should end (`sent`)."""
     T_grasp, width = plan.T_base_grasp, job.gripper.width
     widths = FingerWidths(width, width, width + job.config.release_clearance)
-    direction = job.t.place_direction(job.T_base_fixture)
+    T_above = above_peg(job.T_base_fixture, job.t.fixture, job.config.executor.peg_clearance)
     with job.stage("look"):
         try:
             fused, new = second_look(job.arm, job.camera, planner, job.T_base_cam, cloud, T_grasp, width,
                                      job.config.executor.end_tolerance, job.config.look, job.config.perception)
         except (ValueError, NoIKSolution) as exc:  # nothing seen, or no way to show it: go on with the first look
             job.result.look = {"used": False, "why": str(exc)}
-            return _replanned(job, planner, plan, chosen, cloud, widths, direction)
+            return _replanned(job, planner, plan, chosen, cloud, widths)
         starts = np.stack([c.T_base_fixture_seen for c in options if c.grasp_rank == chosen.grasp_rank])
-        q, why = job.arm.getActualQ(), "no place"
+        q, why, line = job.arm.getActualQ(), "no place", _place_line(job, fused)
         for c in job.placer(fused, chosen.T_base_tcp, starts)[: job.config.most_plans]:  # as imitated (no half-turn)
+            c = replace(c, T_base_fixture=T_above)  # placed clear of a peg, as the first look's pairs
             try:
-                rest = planner.place_from(q, T_grasp, c.motion @ T_grasp, direction, widths)
+                rest = planner.place_from(q, T_grasp, c.motion @ T_grasp, line(c), widths)
             except NoIKSolution as exc:
                 why = str(exc)
                 continue
@@ -367,12 +368,13 @@ def _look(job: _Job, planner: Planner, plan, chosen: Candidate, options: list, c
             job.result.poses["place"] = _ur(rest.T_base_place)
             return rest, transform_points(c.motion, cloud)
         job.result.look = {"used": False, "new_points": new, "why": why}
-        return _replanned(job, planner, plan, chosen, cloud, widths, direction)
+        return _replanned(job, planner, plan, chosen, cloud, widths)
 
 
-def _replanned(job: _Job, planner: Planner, plan, chosen: Candidate, cloud: np.ndarray, widths, direction):
-    """The first look's place, planned again from where the arm is now."""
-    rest = planner.place_from(job.arm.getActualQ(), plan.T_base_grasp, plan.T_base_place, direction, widths)
+def _replanned(job: _Job, planner: Planner, plan, chosen: Candidate, cloud: np.ndarray, widths):
+    """The first look's place (and its line onto the fixture), planned again from where the arm is now."""
+    rest = planner.place_from(job.arm.getActualQ(), plan.T_base_grasp, plan.T_base_place,
+                              _place_line(job, cloud)(chosen), widths)
     return rest, transform_points(chosen.motion, cloud)
 
 
