@@ -130,6 +130,37 @@ def test_a_pose_where_every_grasp_is_in_the_table_says_no_grasp_like_the_demos_e
         choose(planner, pairs, np.zeros(6), np.array([0, 0, -1.0]), elsewhere)
 
 
+def test_a_job_that_looks_again_picks_a_reachable_grasp_whose_first_look_place_is_not():
+    """With pick_only (the second look), pairs whose places all fail give the first grasp that plans
+    alone, planned without a place; grasps that fail stay failures, and without pick_only it is a failure."""
+    from contextlib import nullcontext
+    from types import SimpleNamespace
+
+    from app.jobs.choice import PICK_ONLY, NoCandidate, choose
+    from app.predict.candidates import Candidate
+
+    calls = []
+
+    def pick_place(q, T_grasp, T_place, direction, widths):
+        calls.append((T_grasp, T_place))
+        return SimpleNamespace(T_base_grasp=T_grasp, T_base_place=T_place)
+
+    planner = SimpleNamespace(scene=SimpleNamespace(geometry=SimpleNamespace(stroke=0.085),
+                                                    fingers=lambda width: nullcontext()), pick_place=pick_place)
+    pairs = [Candidate(make_pose(t=[0.5, 0.01 * k, 0.02]), np.eye(4), np.eye(4), grasp_rank=k) for k in range(3)]
+    first_grasp_low = lambda T, what: (f"the gripper at the {what} hits rack" if what == "place" or T[1, 3] < 0.005  # noqa: E731
+                                       else None)
+    with pytest.raises(NoCandidate):
+        choose(planner, pairs, np.zeros(6), np.array([0, 0, -1.0]), first_grasp_low)
+    choice = choose(planner, pairs, np.zeros(6), np.array([0, 0, -1.0]), first_grasp_low, pick_only=True)
+    assert choice.candidate.grasp_rank == 1 and calls == [(pairs[1].T_base_tcp, None)]
+    assert [t["outcome"].endswith("(quick test)") for t in choice.tried] == [True, True, True, False]
+    assert choice.tried[-1]["outcome"] == PICK_ONLY and choice.tried[-1]["grasp_rank"] == 1
+    everything_low = lambda T, what: "the gripper at the grasp hits table"  # noqa: E731
+    with pytest.raises(NoCandidate):
+        choose(planner, pairs, np.zeros(6), np.array([0, 0, -1.0]), everything_low, pick_only=True)
+
+
 @pytest.mark.slow
 def test_a_mug_placed_above_its_hang_on_the_peg_hangs_where_one_placed_at_it_does_not():
     """The oracle's mug of seed 5 hangs with its handle resting on the peg: placed there, the handle

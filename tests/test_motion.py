@@ -435,3 +435,20 @@ def test_line_alternatives_are_the_axis_shorter_and_a_cone_of_six_about_it():
     turns = np.degrees(np.arccos(np.clip(np.sum(across * np.roll(across, -1, axis=0), axis=1)
                                          / np.linalg.norm(across, axis=1) ** 2, -1, 1)))
     np.testing.assert_allclose(turns, 60.0, atol=1e-9)  # six azimuths, evenly spaced
+
+
+def test_a_pick_alone_ends_at_the_lift_and_its_place_planned_from_there_ends_at_the_place(kin, limits, scene):
+    """pick_place with no place plans to the pre-grasp, the approach and the lift only; place_from at the
+    lift's end (as after the second look) then carries the held grasp to the place and goes home."""
+    from app.motion.executor import Planner
+
+    T_grasp = make_pose(rotvec_to_matrix([np.pi, 0, 0]), [0.5, 0.05, 0.15])
+    T_place = make_pose(rotvec_to_matrix([np.pi, 0, 0]), [0.45, -0.15, 0.15])
+    planner = Planner(kin, limits, scene)
+    pick = planner.pick_place(HOME_Q, T_grasp, None, None)
+    assert [s.label for s in pick.segments] == ["to pre-grasp", "approach", "lift"] and pick.T_base_place is None
+    assert np.allclose(kin.fk(pick.segment("approach").end), pick.T_base_grasp, atol=1e-4)
+    rest = planner.place_from(pick.segment("lift").end, pick.T_base_grasp, T_place, np.array([0.0, 0.0, 1.0]))
+    assert [s.label for s in rest.segments] == ["carry", "place", "retreat", "clear", "home"]
+    assert np.allclose(rest.segment("carry").q[0], pick.segment("lift").end)
+    assert np.allclose(kin.fk(rest.segment("place").end), T_place, atol=1e-4)

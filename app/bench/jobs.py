@@ -18,6 +18,11 @@ from app.sim.jobs import JobSpec, fresh_client_before, run_series
 from app.tasks.task import task
 
 
+def _moved_place(look: dict) -> bool:
+    """Whether the second look chose the place: moved the first plan's by over 1 cm, or gave a pick alone one."""
+    return bool(look.get("used")) and (bool(look.get("pick_only")) or look.get("place_moved_m", 0.0) > 0.01)
+
+
 def summarise(name: str, results: list[JobResult]) -> dict:
     """Figures of one task's series."""
     planned = [r for r in results if r.plan]
@@ -41,7 +46,8 @@ def summarise(name: str, results: list[JobResult]) -> dict:
     looked = [r.look for r in results if r.look]
     if looked:
         out[f"{name}_second_look_used"] = sum(bool(k.get("used")) for k in looked)
-        out[f"{name}_second_look_moved_place"] = sum(k.get("place_moved_m", 0.0) > 0.01 for k in looked)
+        out[f"{name}_second_look_moved_place"] = sum(_moved_place(k) for k in looked)
+        out[f"{name}_picked_before_a_place"] = sum(bool(k.get("pick_only")) for k in looked)
     out[f"{name}_failures"] = dict(sorted(failures.items())) or "none"
     return out
 

@@ -6,6 +6,11 @@ Cheap tests first, the full plan last: a pair is planned only when the quick rea
 ~10 ms) passes at its grasp and at its place, for one of the grasp's two half-turns. Results of
 the quick test are cached per pose, as many pairs share a grasp. At most `most_plans` full plans
 are tried (each is 0.2-3 s); the first that succeeds is returned.
+
+With `pick_only` (a job that looks again at what it holds before it places it), when no pair plans,
+the first grasp that plans alone is returned: its place is chosen after the second look, from a
+cloud that may show what the first hid (a mug's handle), so a first-look place that cannot be
+reached does not stop a grasp that can.
 """
 from __future__ import annotations
 
@@ -25,6 +30,7 @@ Widths = Callable[[np.ndarray], FingerWidths]  # grasp (4, 4) -> the fingers' op
 
 NO_DEMO_LIKE_GRASP = "no grasp like the demos'"  # how a job's reason starts when none exists (bench counts it apart)
 GRASP_HITS = "the gripper at the grasp hits "  # the quick test's outcome (app.motion.ik.reach_failure)
+PICK_ONLY = "planned (pick only: the place waits for the second look)"
 
 
 def _grasp_in_table(outcome: str) -> bool:
@@ -73,11 +79,12 @@ class _Cached:
 
 def choose(planner: Planner, candidates: list[Candidate], q_start: np.ndarray,
            place_direction: np.ndarray | Callable[[Candidate], np.ndarray],
-           failure: Failure, most_plans: int = 6, widths: Widths | None = None) -> Choice:
+           failure: Failure, most_plans: int = 6, widths: Widths | None = None, pick_only: bool = False) -> Choice:
     """Plan the first pair that passes the quick test at its grasp and its place and the full plan;
     NoCandidate with the best pair's reason and the count of pairs tried when none does. `place_direction`:
     the line onto the fixture, or a function of the pair giving it. `widths(T_grasp)`:
-    the fingers' openings on the approach, holding and let go (fully open if not given)."""
+    the fingers' openings on the approach, holding and let go (fully open if not given). `pick_only`:
+    when no pair plans, the first grasp that plans alone (its plan has no place)."""
     quick = _Cached(failure)
     stroke = planner.scene.geometry.stroke
     tried: list[dict] = []
@@ -103,9 +110,34 @@ def choose(planner: Planner, candidates: list[Candidate], q_start: np.ndarray,
             continue
         tried.append(describe(c, "planned"))
         return Choice(plan, c, tried)
+    if pick_only and (picked := _pick_alone(planner, candidates, q_start, quick, most_plans, widths)):
+        tried.append(describe(picked.candidate, PICK_ONLY))
+        return Choice(picked.plan, picked.candidate, tried)
     if not tried:
         raise NoCandidate(f"{NO_DEMO_LIKE_GRASP} was found on this cloud (no candidate)", tried)
     if all(_grasp_in_table(t["outcome"]) for t in tried):
         raise NoCandidate(f"{NO_DEMO_LIKE_GRASP} exists in this pose: every candidate's gripper "
                           f"({len(tried)}, both half-turns) would be in the table", tried)
     raise NoCandidate(f"none of {len(tried)} candidates could be planned; the best: {tried[0]['outcome']}", tried)
+
+
+def _pick_alone(planner: Planner, candidates: list[Candidate], q_start: np.ndarray, quick: _Cached,
+                most_plans: int, widths: Widths | None) -> Choice | None:
+    """The first distinct grasp (of at most `most_plans` planned) that passes the quick test and plans
+    without a place; None when none does."""
+    stroke, plans, seen = planner.scene.geometry.stroke, 0, set()
+    for c in candidates:
+        if c.grasp_rank in seen:
+            continue
+        seen.add(c.grasp_rank)
+        opening = widths(c.T_base_tcp) if widths else FingerWidths.fully_open(stroke)
+        with planner.scene.fingers(opening.approach):
+            if quick(c.T_base_tcp, "grasp", opening.approach):
+                continue
+        plans += 1
+        try:
+            return Choice(planner.pick_place(q_start, c.T_base_tcp, None, None, opening), c)
+        except NoIKSolution:
+            if plans >= most_plans:
+                return None
+    return None

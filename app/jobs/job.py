@@ -288,13 +288,15 @@ def _plan(job: _Job, planner: Planner, options: list, cloud: np.ndarray):
         failure = reach_failure(job.kin, job.scene, q, ignore=(OBJECT,))
         try:
             choice = choose(planner, options, q, _place_line(job, cloud), failure,
-                            job.config.most_plans, widths)
+                            job.config.most_plans, widths, pick_only=job.placer is not None)
         except NoCandidate as exc:
             job.result.candidates += exc.tried
             raise
         job.result.candidates += choice.tried
         plan = choice.plan
-        job.result.poses = {"grasp": _ur(plan.T_base_grasp), "place": _ur(plan.T_base_place)}
+        job.result.poses["grasp"] = _ur(plan.T_base_grasp)
+        if plan.T_base_place is not None:  # a pick alone keeps the first look's predicted place in the record
+            job.result.poses["place"] = _ur(plan.T_base_place)
         job.result.plan = {"planning_seconds": round(plan.seconds, 3), "trajectory_seconds": round(plan.duration, 2),
                            "joint_travel_rad": round(plan.travel, 2), "candidates_tried": len(choice.tried)}
     return plan, choice.candidate
@@ -341,41 +343,50 @@ def _recover(job: _Job, planner: Planner, plan) -> None:
 
 def _look(job: _Job, planner: Planner, plan, chosen: Candidate, options: list, cloud: np.ndarray):
     """The second look (`app.jobs.second_look`): show the held object, imitate the place again on both
-    views, and plan the rest from where the arm is - with the first pair's place when no new one plans.
-    Returns the plan to carry on with and where the object should end (`sent`)."""
+    views, and plan the rest from where the arm is - with the first look's places for this grasp when
+    no new one plans (or nothing was seen). Returns the plan to carry on with and where the object
+    should end (`sent`)."""
     T_grasp, width = plan.T_base_grasp, job.gripper.width
     widths = FingerWidths(width, width, width + job.config.release_clearance)
     T_above = above_peg(job.T_base_fixture, job.t.fixture, job.config.executor.peg_clearance)
+    first = [chosen, *(c for c in options if c.grasp_rank == chosen.grasp_rank and c.place_rank != chosen.place_rank)]
     with job.stage("look"):
         try:
             fused, new = second_look(job.arm, job.camera, planner, job.T_base_cam, cloud, T_grasp, width,
                                      job.config.executor.end_tolerance, job.config.look, job.config.perception)
         except (ValueError, NoIKSolution) as exc:  # nothing seen, or no way to show it: go on with the first look
-            job.result.look = {"used": False, "why": str(exc)}
-            return _replanned(job, planner, plan, chosen, cloud, widths)
-        starts = np.stack([c.T_base_fixture_seen for c in options if c.grasp_rank == chosen.grasp_rank])
-        q, why, line = job.arm.getActualQ(), "no place", _place_line(job, fused)
-        for c in job.placer(fused, chosen.T_base_tcp, starts)[: job.config.most_plans]:  # as imitated (no half-turn)
+            look, tries = {"used": False, "why": str(exc)}, []
+        else:
+            starts = np.stack([c.T_base_fixture_seen for c in first])
+            look = {"used": False, "new_points": new, "why": "no place"}
+            tries = [(c, fused) for c in job.placer(fused, chosen.T_base_tcp, starts)[: job.config.most_plans]]
+        tries += [(c, cloud) for c in first[: job.config.most_plans]]  # as imitated (no half-turn)
+        q, whys = job.arm.getActualQ(), []
+        for c, seen in tries:
             c = replace(c, T_base_fixture=T_above)  # placed clear of a peg, as the first look's pairs
             try:
-                rest = planner.place_from(q, T_grasp, c.motion @ T_grasp, line(c), widths)
+                rest = planner.place_from(q, T_grasp, c.motion @ T_grasp, _place_line(job, seen)(c), widths)
             except NoIKSolution as exc:
-                why = str(exc)
+                whys.append(str(exc))
+                if seen is not cloud and look["why"] == "no place":
+                    look["why"] = whys[-1]
                 continue
-            moved = float(np.linalg.norm(rest.T_base_place[:3, 3] - plan.T_base_place[:3, 3]))
-            job.result.look = {"used": True, "new_points": new, "place_rank": c.place_rank,
-                               "place_moved_m": round(moved, 4)}
+            if seen is not cloud:
+                look |= {"used": True, "place_rank": c.place_rank, "why": None}
+                look |= _moved(plan, rest)
+            job.result.look = {k: v for k, v in look.items() if v is not None}
             job.result.poses["place"] = _ur(rest.T_base_place)
-            return rest, transform_points(c.motion, cloud)
-        job.result.look = {"used": False, "new_points": new, "why": why}
-        return _replanned(job, planner, plan, chosen, cloud, widths)
+            return rest, transform_points(c.motion, seen)
+        job.result.look = look
+        raise JobFailed(f"none of {len(tries)} places could be planned for the held grasp; the best: "
+                        f"{whys[0] if whys else 'no place'}")
 
 
-def _replanned(job: _Job, planner: Planner, plan, chosen: Candidate, cloud: np.ndarray, widths):
-    """The first look's place (and its line onto the fixture), planned again from where the arm is now."""
-    rest = planner.place_from(job.arm.getActualQ(), plan.T_base_grasp, plan.T_base_place,
-                              _place_line(job, cloud)(chosen), widths)
-    return rest, transform_points(chosen.motion, cloud)
+def _moved(plan, rest) -> dict:
+    """How far the second look moved the place from the first plan's (or that the first had none)."""
+    if plan.T_base_place is None:
+        return {"pick_only": True}
+    return {"place_moved_m": round(float(np.linalg.norm(rest.T_base_place[:3, 3] - plan.T_base_place[:3, 3])), 4)}
 
 
 def _place(job: _Job, plan, sent: np.ndarray) -> None:

@@ -30,7 +30,7 @@ class SecondLookConfig:
     """Where the held object is shown from, and how its points are told from the gripper's."""
 
     turns: tuple[float, ...] = (np.pi,)  # rad on the wrist's last joint from the lift's end, one view each
-    reach: float = 0.03  # m the crop reaches beyond the first cloud's extent
+    reach: float = 0.08  # m the crop reaches beyond the first cloud's extent: a handle hidden in the first view lies up to ~7 cm past it
     gripper_margin: float = 0.01  # m: points this close to the gripper's boxes are the gripper's
 
 

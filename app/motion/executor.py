@@ -86,7 +86,7 @@ class PickPlacePlan:
 
     segments: list[JointTrajectory]
     T_base_grasp: np.ndarray
-    T_base_place: np.ndarray
+    T_base_place: np.ndarray | None  # None: a pick alone, its place still to plan
     seconds: float = 0.0
     travel: float = 0.0  # rad of joint travel, summed
     notes: list[str] = field(default_factory=list)
@@ -137,17 +137,19 @@ class Planner:
         return path_timing(path, line_length(T0, T1), self.limits, c.line_speed, c.line_acceleration, c.line_jerk,
                            label)
 
-    def pick_place(self, q_start: np.ndarray, T_base_grasp: np.ndarray, T_base_place: np.ndarray,
-                   place_direction: np.ndarray, widths: FingerWidths | None = None) -> PickPlacePlan:
+    def pick_place(self, q_start: np.ndarray, T_base_grasp: np.ndarray, T_base_place: np.ndarray | None,
+                   place_direction: np.ndarray | None, widths: FingerWidths | None = None) -> PickPlacePlan:
         """The whole motion for a grasp and a place pose of the TCP; `place_direction` (3,) is the
         unit direction the object comes from onto the fixture (base frame); `widths`: the fingers'
-        openings on the way (fully open when not given)."""
+        openings on the way (fully open when not given). T_base_place None: the pick alone (to the
+        pre-grasp, approach, lift), its place planned later with `place_from`."""
         start = time.perf_counter()
         widths = widths or FingerWidths.fully_open(self.scene.geometry.stroke)
         errors = []
         for flip in self._flips_nearest_first(q_start, T_base_grasp):
             try:
-                plan = self._pick_place(q_start, T_base_grasp @ flip, T_base_place @ flip, place_direction, widths)
+                T_place = None if T_base_place is None else T_base_place @ flip
+                plan = self._pick_place(q_start, T_base_grasp @ flip, T_place, place_direction, widths)
             except NoIKSolution as exc:
                 errors.append(str(exc))
                 continue
@@ -183,8 +185,8 @@ class Planner:
         approach, lift = self._first(at_grasp, grasp_lines)
         with self.scene.fingers(widths.approach):
             to_pre_grasp = self.transit(q_start, approach.q[0], "to pre-grasp")
-        segments = [to_pre_grasp, approach, lift, *self._place_segments(lift.end, T_grasp, T_place, place_direction,
-                                                                        widths)]
+        rest = [] if T_place is None else self._place_segments(lift.end, T_grasp, T_place, place_direction, widths)
+        segments = [to_pre_grasp, approach, lift, *rest]
         travel = float(sum(np.abs(np.diff(s.q, axis=0)).sum() for s in segments))
         return PickPlacePlan(segments, T_grasp, T_place, travel=travel, widths=widths)
 
