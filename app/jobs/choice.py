@@ -86,13 +86,10 @@ def choose(planner: Planner, candidates: list[Candidate], q_start: np.ndarray,
     the fingers' openings on the approach, holding and let go (fully open if not given). `pick_only`:
     when no pair plans, the first grasp that plans alone (its plan has no place)."""
     quick = _Cached(failure)
-    stroke = planner.scene.geometry.stroke
     tried: list[dict] = []
     plans = 0
     for c in candidates:
-        opening = widths(c.T_base_tcp) if widths else FingerWidths.fully_open(stroke)
-        with planner.scene.fingers(opening.approach):
-            why = quick(c.T_base_tcp, "grasp", opening.approach)
+        opening, why = _grasp_quick(planner, c, quick, widths)
         if not why:
             with planner.scene.fingers(opening.held):
                 why = quick(c.T_base_tcp_place, "place", opening.held)
@@ -121,19 +118,26 @@ def choose(planner: Planner, candidates: list[Candidate], q_start: np.ndarray,
     raise NoCandidate(f"none of {len(tried)} candidates could be planned; the best: {tried[0]['outcome']}", tried)
 
 
+def _grasp_quick(planner: Planner, c: Candidate, quick: _Cached,
+                 widths: Widths | None) -> tuple[FingerWidths, str | None]:
+    """The fingers' openings for the pair's grasp, and the quick test's reason against it (None: passes)."""
+    opening = widths(c.T_base_tcp) if widths else FingerWidths.fully_open(planner.scene.geometry.stroke)
+    with planner.scene.fingers(opening.approach):
+        return opening, quick(c.T_base_tcp, "grasp", opening.approach)
+
+
 def _pick_alone(planner: Planner, candidates: list[Candidate], q_start: np.ndarray, quick: _Cached,
                 most_plans: int, widths: Widths | None) -> Choice | None:
     """The first distinct grasp (of at most `most_plans` planned) that passes the quick test and plans
     without a place; None when none does."""
-    stroke, plans, seen = planner.scene.geometry.stroke, 0, set()
+    plans, seen = 0, set()
     for c in candidates:
         if c.grasp_rank in seen:
             continue
         seen.add(c.grasp_rank)
-        opening = widths(c.T_base_tcp) if widths else FingerWidths.fully_open(stroke)
-        with planner.scene.fingers(opening.approach):
-            if quick(c.T_base_tcp, "grasp", opening.approach):
-                continue
+        opening, why = _grasp_quick(planner, c, quick, widths)
+        if why:
+            continue
         plans += 1
         try:
             return Choice(planner.pick_place(q_start, c.T_base_tcp, None, None, opening), c)

@@ -355,28 +355,31 @@ def _look(job: _Job, planner: Planner, plan, chosen: Candidate, options: list, c
             fused, new = second_look(job.arm, job.camera, planner, job.T_base_cam, cloud, T_grasp, width,
                                      job.config.executor.end_tolerance, job.config.look, job.config.perception)
         except (ValueError, NoIKSolution) as exc:  # nothing seen, or no way to show it: go on with the first look
-            look, tries = {"used": False, "why": str(exc)}, []
+            look, fused, tries = {"used": False, "why": str(exc)}, None, []
         else:
             starts = np.stack([c.T_base_fixture_seen for c in first])
-            look = {"used": False, "new_points": new, "why": "no place"}
+            look = {"used": False, "new_points": new}
             tries = [(c, fused) for c in job.placer(fused, chosen.T_base_tcp, starts)[: job.config.most_plans]]
         tries += [(c, cloud) for c in first[: job.config.most_plans]]  # as imitated (no half-turn)
-        q, whys = job.arm.getActualQ(), []
+        q, whys, fused_whys = job.arm.getActualQ(), [], []
         for c, seen in tries:
             c = replace(c, T_base_fixture=T_above)  # placed clear of a peg, as the first look's pairs
             try:
                 rest = planner.place_from(q, T_grasp, c.motion @ T_grasp, _place_line(job, seen)(c), widths)
             except NoIKSolution as exc:
                 whys.append(str(exc))
-                if seen is not cloud and look["why"] == "no place":
-                    look["why"] = whys[-1]
+                if seen is fused:
+                    fused_whys.append(whys[-1])
                 continue
-            if seen is not cloud:
-                look |= {"used": True, "place_rank": c.place_rank, "why": None}
-                look |= _moved(plan, rest)
-            job.result.look = {k: v for k, v in look.items() if v is not None}
+            if seen is fused:
+                look = {"used": True, "new_points": new, "place_rank": c.place_rank, **_moved(plan, rest)}
+            elif fused is not None:  # why the fused cloud's best place was not taken
+                look["why"] = fused_whys[0] if fused_whys else "no place"
+            job.result.look = look
             job.result.poses["place"] = _ur(rest.T_base_place)
             return rest, transform_points(c.motion, seen)
+        if fused is not None:
+            look["why"] = fused_whys[0] if fused_whys else "no place"
         job.result.look = look
         raise JobFailed(f"none of {len(tries)} places could be planned for the held grasp; the best: "
                         f"{whys[0] if whys else 'no place'}")
