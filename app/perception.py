@@ -89,8 +89,8 @@ def resample(points: np.ndarray, n: int, seed: int) -> np.ndarray:
     return np.concatenate([points, points[extra]])
 
 
-def object_cloud(frame: Frame, T_base_cam: np.ndarray, cfg: PerceptionConfig = PerceptionConfig()) -> np.ndarray:
-    """The object's cloud (cfg.n_points, 3) in the base frame, or a one-line ValueError."""
+def object_points(frame: Frame, T_base_cam: np.ndarray, cfg: PerceptionConfig = PerceptionConfig()) -> np.ndarray:
+    """All the object's points (M, 3) in the base frame, before resampling, or a one-line ValueError."""
     points = crop(back_project(frame, T_base_cam), cfg)
     if len(points) == 0:
         raise ValueError("no object in the workspace (no depth point inside the workspace box)")
@@ -100,7 +100,12 @@ def object_cloud(frame: Frame, T_base_cam: np.ndarray, cfg: PerceptionConfig = P
     points = largest_cluster(points, cfg)
     pcd = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(points))
     pcd, _ = pcd.remove_statistical_outlier(cfg.outlier_neighbors, cfg.outlier_std_ratio)
-    return resample(np.asarray(pcd.points), cfg.n_points, cfg.seed)
+    return np.asarray(pcd.points)
+
+
+def object_cloud(frame: Frame, T_base_cam: np.ndarray, cfg: PerceptionConfig = PerceptionConfig()) -> np.ndarray:
+    """The object's cloud (cfg.n_points, 3) in the base frame, or a one-line ValueError."""
+    return resample(object_points(frame, T_base_cam, cfg), cfg.n_points, cfg.seed)
 
 
 def held_object_cloud(frame: Frame, T_base_cam: np.ndarray, T_base_tcp: np.ndarray, width: float, near: np.ndarray,

@@ -37,12 +37,15 @@ from app.motion.place_line import above_peg, peg_line_direction
 from app.motion.scene import PlanningScene
 from app.nift.candidates import CandidateConfig
 from app.nift.imitate import ImitationConfig, use_threads
-from app.perception import PerceptionConfig, object_cloud
+from app.objects import fixture
+from app.perception import PerceptionConfig, object_points, resample
 from app.predict.candidates import Candidate
 from app.predict.grasp_centering import held_width
-from app.predict.methods import TEMPLATE_METHODS
+from app.predict.hole_places import with_hole_pairs
+from app.predict.methods import ORACLE, TEMPLATE_METHODS
 from app.predict.predict import Prediction, predict, predict_place
 from app.predict.table_clearance import backed_off_table
+from app.tasks.library import DEMOS_DIR, task_demos
 from app.tasks.task import Task
 from hardware.interfaces import Arm, DepthCamera, Frame, Gripper
 from hardware.kinematics import UR5Kinematics
@@ -82,6 +85,8 @@ class JobConfig:
     # (app.predict.feasibility); what the cell can reach is chosen among the candidates (app.jobs.choice)
     carried_grasps: bool = True  # also try the demos' grasps carried from each place (app.predict.carried_grasps)
     table_z: float = 0.0  # m, the table top in the base frame (the cell's layout)
+    hole_places: bool = True  # a hang also tries the places that put the handle hole seen in the cloud where
+    # the demos had it, first (app.predict.hole_places); not for the oracle, whose poses are true
     second_look: bool = False  # show the held object to the camera and imitate the place again (app.jobs.second_look):
     # off, as on seeds 0-9 it hung no more mugs (0/10) and cost bowls (10/10 -> 7/10; docs/jobs.md)
     look: SecondLookConfig = SecondLookConfig()
@@ -139,6 +144,7 @@ class JobResult:
     candidates: list[dict] = field(default_factory=list)  # every pair the plan stage looked at (`choice.describe`)
     attempts: list[dict] = field(default_factory=list)  # one per grasp: its candidate and the outcome
     look: dict = field(default_factory=dict)  # the second look: points seen, the place it chose, how far it moved
+    hole: dict = field(default_factory=dict)  # the handle hole seen in the cloud, if a hang looks for one
     info: dict = field(default_factory=dict)  # the cell's own facts (object, seed, ...)
 
     def record(self) -> dict:
@@ -146,7 +152,7 @@ class JobResult:
         return {"task": self.task, "method": self.method, "success": self.success, "failed_stage": self.failed_stage,
                 "reason": self.reason, "seconds": self.seconds, "total_seconds": round(sum(self.seconds.values()), 3),
                 "poses": self.poses, "plan": self.plan, "arm": self.arm, "seen": self.seen, "candidates": self.candidates,
-                "attempts": self.attempts, "look": self.look, **self.info}
+                "attempts": self.attempts, "look": self.look, "hole": self.hole, **self.info}
 
 
 @contextmanager
@@ -219,6 +225,7 @@ class _Job:
     result: JobResult
     placer: Placer | None = None  # imitates the place again after the second look (None: no second look)
     first: Frame | None = None  # the first frame: the fixture without the object
+    points: np.ndarray | None = None  # the last look's object points (M, 3) before resampling
 
     def stage(self, name: str):
         return _stage(self.result, name, self.hooks)
@@ -257,7 +264,8 @@ def _observe(job: _Job) -> np.ndarray:
         frame = job.camera.capture()
         job.first = job.first or frame
     with job.stage("perceive"):
-        cloud = object_cloud(frame, job.T_base_cam, job.config.perception)
+        job.points = object_points(frame, job.T_base_cam, job.config.perception)
+        cloud = resample(job.points, job.config.perception.n_points, job.config.perception.seed)
         job.scene.add_cloud(OBJECT, cloud, eye=job.T_base_cam[:3, 3])
     return cloud
 
@@ -269,8 +277,21 @@ def _imitate(job: _Job, cloud: np.ndarray) -> list:
         pred = job.predictor(cloud)
         options = [replace(c, T_base_tcp=backed_off_table(c.T_base_tcp, cloud, job.config.table_z))
                    for c in pred.options()]
+        if _looks_for_hole(job):
+            options, job.result.hole = with_hole_pairs(options, job.points, _demos(job))
     job.result.poses = {"grasp": _ur(pred.T_base_tcp), "place": _ur(pred.T_base_tcp_place)}
     return options
+
+
+def _demos(job: _Job) -> list:
+    """The task's demos (for the hole they hung, `app.predict.hole_places`)."""
+    return task_demos(job.config.demos or DEMOS_DIR / job.t.demos)
+
+
+def _looks_for_hole(job: _Job) -> bool:
+    """Whether the job tries places built from the handle hole: a hang (a fixture with a peg) by a method
+    that is not the oracle, with `hole_places` on."""
+    return job.config.hole_places and job.config.method != ORACLE and "peg_origin" in fixture(job.t.fixture).landmarks
 
 
 def _plan(job: _Job, planner: Planner, options: list, cloud: np.ndarray):
@@ -351,16 +372,21 @@ def _look(job: _Job, planner: Planner, plan, chosen: Candidate, options: list, c
     T_above = above_peg(job.T_base_fixture, job.t.fixture, job.config.executor.peg_clearance)
     first = [chosen, *(c for c in options if c.grasp_rank == chosen.grasp_rank and c.place_rank != chosen.place_rank)]
     with job.stage("look"):
+        holes = [(c, cloud) for c in first if c.place_rank < 0]  # the first look's hole places, first
         try:
-            fused, new = second_look(job.arm, job.camera, planner, job.T_base_cam, cloud, T_grasp, width,
-                                     job.config.executor.end_tolerance, job.config.look, job.config.perception)
+            points, new = second_look(job.arm, job.camera, planner, job.T_base_cam, job.points, T_grasp, width,
+                                      job.config.executor.end_tolerance, job.config.look, job.config.perception)
         except (ValueError, NoIKSolution) as exc:  # nothing seen, or no way to show it: go on with the first look
             look, fused, tries = {"used": False, "why": str(exc)}, None, []
         else:
+            fused = resample(points, len(cloud), job.config.perception.seed)
             starts = np.stack([c.T_base_fixture_seen for c in first])
             look = {"used": False, "new_points": new}
             tries = [(c, fused) for c in job.placer(fused, chosen.T_base_tcp, starts)[: job.config.most_plans]]
-        tries += [(c, cloud) for c in first[: job.config.most_plans]]  # as imitated (no half-turn)
+            if not holes and _looks_for_hole(job):  # the hole the first look missed, in both views
+                pairs, look["hole"] = with_hole_pairs([chosen], points, _demos(job))
+                tries = [(c, fused) for c in pairs if c.place_rank < 0] + tries
+        tries = holes + tries + [(c, cloud) for c in first[: job.config.most_plans] if c.place_rank >= 0]
         q, whys, fused_whys = job.arm.getActualQ(), [], []
         for c, seen in tries:
             c = replace(c, T_base_fixture=T_above)  # placed clear of a peg, as the first look's pairs
@@ -372,7 +398,7 @@ def _look(job: _Job, planner: Planner, plan, chosen: Candidate, options: list, c
                     fused_whys.append(whys[-1])
                 continue
             if seen is fused:
-                look = {"used": True, "new_points": new, "place_rank": c.place_rank, **_moved(plan, rest)}
+                look.update({"used": True, "place_rank": c.place_rank, **_moved(plan, rest)})
             elif fused is not None:  # why the fused cloud's best place was not taken
                 look["why"] = fused_whys[0] if fused_whys else "no place"
             job.result.look = look

@@ -10,8 +10,9 @@ TCP at T_view stood at
 
     x_0 = T_grasp @ inv(T_view) @ x                  (exact up to slip)
 
-when the object was first seen: both views are fused in that frame and resampled to the first
-cloud's size, and `app.predict.predict.predict_place` imitates the place on the fused cloud.
+when the object was first seen: both views are fused in that frame; the job resamples them to the
+first cloud's size for `app.predict.predict.predict_place` to imitate the place on, and looks for the
+handle hole in all of them (`app.predict.hole_places`).
 """
 from __future__ import annotations
 
@@ -20,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from app.motion.executor import OBJECT, Planner, execute
-from app.perception import PerceptionConfig, held_object_cloud, resample
+from app.perception import PerceptionConfig, held_object_cloud
 from hardware.interfaces import Arm, DepthCamera, JointLimits
 from hardware.se3 import invert, transform_points
 
@@ -53,8 +54,9 @@ def second_look(arm: Arm, camera: DepthCamera, planner: Planner, T_base_cam: np.
                 T_base_grasp: np.ndarray, width: float, tolerance: float,
                 config: SecondLookConfig = SecondLookConfig(),
                 perception: PerceptionConfig = PerceptionConfig()) -> tuple[np.ndarray, int]:
-    """Show the held object from each view, return (the fused cloud (N, 3) in the grasp-time frame, the
-    count of new points); the arm is left at the last view. ValueError when a view shows nothing."""
+    """Show the held object, first seen as the points `first` (M, 3), from each view; return (all the
+    points (M', 3) in the grasp-time frame, the count of new ones); the arm is left at the last view.
+    ValueError when a view shows nothing."""
     start_q = arm.getActualQ()
     radius = float(np.linalg.norm(first - first.mean(axis=0), axis=1).max()) + config.reach
     views = []
@@ -67,5 +69,4 @@ def second_look(arm: Arm, camera: DepthCamera, planner: Planner, T_base_cam: np.
         seen = held_object_cloud(camera.capture(), T_base_cam, T_view, width, near, radius, perception,
                                  planner.scene.geometry, config.gripper_margin)
         views.append(to_grasp_frame(seen, T_base_grasp, T_view))
-    fused = resample(np.concatenate([first, *views]), len(first), perception.seed)
-    return fused, int(sum(len(v) for v in views))
+    return np.concatenate([first, *views]), int(sum(len(v) for v in views))
