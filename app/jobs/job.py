@@ -374,18 +374,19 @@ def _look(job: _Job, planner: Planner, plan, chosen: Candidate, options: list, c
     with job.stage("look"):
         holes = [(c, cloud) for c in first if c.place_rank < 0]  # the first look's hole places, first
         try:
-            points, new = second_look(job.arm, job.camera, planner, job.T_base_cam, job.points, T_grasp, width,
-                                      job.config.executor.end_tolerance, job.config.look, job.config.perception)
+            views = second_look(job.arm, job.camera, planner, job.T_base_cam, job.points, T_grasp, width,
+                                job.config.executor.end_tolerance, job.config.look, job.config.perception)
         except (ValueError, NoIKSolution) as exc:  # nothing seen, or no way to show it: go on with the first look
             look, fused, tries = {"used": False, "why": str(exc)}, None, []
         else:
+            points = np.concatenate([job.points, *views])
             fused = resample(points, len(cloud), job.config.perception.seed)
             starts = np.stack([c.T_base_fixture_seen for c in first])
-            look = {"used": False, "new_points": new}
+            look = {"used": False, "new_points": int(sum(len(v) for v in views))}
             tries = [(c, fused) for c in job.placer(fused, chosen.T_base_tcp, starts)[: job.config.most_plans]]
-            if not holes and _looks_for_hole(job):  # the hole the first look missed, in both views
-                pairs, look["hole"] = with_hole_pairs([chosen], points, _demos(job))
-                tries = [(c, fused) for c in pairs if c.place_rank < 0] + tries
+            if _looks_for_hole(job):
+                held, look["hole"] = _held_hole(job, chosen, views if holes else [*views, points])
+                holes = [(c, fused) for c in held] + holes
         tries = holes + tries + [(c, cloud) for c in first[: job.config.most_plans] if c.place_rank >= 0]
         q, whys, fused_whys = job.arm.getActualQ(), [], []
         for c, seen in tries:
@@ -409,6 +410,18 @@ def _look(job: _Job, planner: Planner, plan, chosen: Candidate, options: list, c
         job.result.look = look
         raise JobFailed(f"none of {len(tries)} places could be planned for the held grasp; the best: "
                         f"{whys[0] if whys else 'no place'}")
+
+
+def _held_hole(job: _Job, chosen: Candidate, clouds: list[np.ndarray]) -> tuple[list[Candidate], dict]:
+    """The hole places for the held grasp from the first of `clouds` (grasp-time frame) that shows the
+    hole - a view alone shows the object as it sits in the hand now, which may have turned on closing -
+    and what was found (with the index of that cloud)."""
+    found = {"found": False, "why": "no view shows the handle hole"}
+    for i, points in enumerate(clouds):
+        pairs, found = with_hole_pairs([chosen], points, _demos(job))
+        if found["found"]:
+            return [c for c in pairs if c.place_rank < 0], {**found, "view": i}
+    return [], found
 
 
 def _moved(plan, rest) -> dict:

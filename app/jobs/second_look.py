@@ -2,8 +2,9 @@
 lift the cell shows what it holds to the Kinect from the side the first view missed - a mug's far
 side, where its handle may be - and imitates the place again from both views.
 
-The view: the wrist's last joint turns the held object by `turns` about the tool axis; the TCP stays
-where the lift left it, over the table and in the camera's view. Perception keeps the points near
+The views: the wrist's last joint turns the held object by each of `turns` about the tool axis (0:
+as the lift left it, which shows the first view's side of the object as it now sits in the hand);
+the TCP stays where the lift left it, over the table and in the camera's view. Perception keeps the points near
 where the object now is, less the gripper's own (its boxes at the forward-kinematics pose,
 `app.perception.held_object_cloud`). The object is rigid in the grasp, so a point x seen with the
 TCP at T_view stood at
@@ -30,7 +31,7 @@ from hardware.se3 import invert, transform_points
 class SecondLookConfig:
     """Where the held object is shown from, and how its points are told from the gripper's."""
 
-    turns: tuple[float, ...] = (np.pi,)  # rad on the wrist's last joint from the lift's end, one view each
+    turns: tuple[float, ...] = (0.0, np.pi)  # rad on the wrist's last joint from the lift's end, one view each
     reach: float = 0.08  # m the crop reaches beyond the first cloud's extent: a handle hidden in the first view lies up to ~7 cm past it
     gripper_margin: float = 0.01  # m: points this close to the gripper's boxes are the gripper's
 
@@ -53,20 +54,21 @@ def to_grasp_frame(points: np.ndarray, T_base_grasp: np.ndarray, T_base_view: np
 def second_look(arm: Arm, camera: DepthCamera, planner: Planner, T_base_cam: np.ndarray, first: np.ndarray,
                 T_base_grasp: np.ndarray, width: float, tolerance: float,
                 config: SecondLookConfig = SecondLookConfig(),
-                perception: PerceptionConfig = PerceptionConfig()) -> tuple[np.ndarray, int]:
-    """Show the held object, first seen as the points `first` (M, 3), from each view; return (all the
-    points (M', 3) in the grasp-time frame, the count of new ones); the arm is left at the last view.
-    ValueError when a view shows nothing."""
+                perception: PerceptionConfig = PerceptionConfig()) -> list[np.ndarray]:
+    """Show the held object, first seen as the points `first` (M, 3), from each view; return each
+    view's points (M_i, 3) in the grasp-time frame; the arm is left at the last view. ValueError when
+    a view shows nothing."""
     start_q = arm.getActualQ()
     radius = float(np.linalg.norm(first - first.mean(axis=0), axis=1).max()) + config.reach
     views = []
     for turn in config.turns:
         q = view_q(start_q, turn, arm.joint_limits)
-        with planner.scene.holding(OBJECT, T_base_grasp), planner.scene.fingers(width):
-            execute(arm, planner.transit(arm.getActualQ(), q, "second look", ignore=(OBJECT,)), tolerance)
+        if np.abs(q - arm.getActualQ()).max() > tolerance:
+            with planner.scene.holding(OBJECT, T_base_grasp), planner.scene.fingers(width):
+                execute(arm, planner.transit(arm.getActualQ(), q, "second look", ignore=(OBJECT,)), tolerance)
         T_view = planner.kin.fk(arm.getActualQ())
         near = transform_points(T_view @ invert(T_base_grasp), first.mean(axis=0, keepdims=True))[0]
         seen = held_object_cloud(camera.capture(), T_base_cam, T_view, width, near, radius, perception,
                                  planner.scene.geometry, config.gripper_margin)
         views.append(to_grasp_frame(seen, T_base_grasp, T_view))
-    return np.concatenate([first, *views]), int(sum(len(v) for v in views))
+    return views
