@@ -55,7 +55,7 @@ def summarise(name: str, results: list[JobResult]) -> dict:
 def run_jobs_benchmark(jobs: int = 20, method: str = "nift", pose: str = "upright", seed: int = 0,
                        tasks: tuple[str, ...] = ("mug", "bowl", "bottle"), cell_config: CellConfig = CellConfig(),
                        calibration: Path | None = None, progress: Callable[[JobResult], None] = lambda r: None,
-                       records: Path | None = None, second_look: bool = False) -> dict:
+                       records: Path | None = None, second_look: bool | None = None) -> dict:
     """Run `jobs` jobs per task (seeds seed .. seed + jobs - 1) and summarise them; the camera pose
     comes from the `calibration` file (calibrating first if it is missing), or is the true one;
     `records`: every job's record, as a JSON list, written there (atomically) at the end; `second_look`:

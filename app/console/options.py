@@ -60,6 +60,6 @@ def imitation_config(args: argparse.Namespace):
 
 def add_second_look_argument(p: argparse.ArgumentParser) -> None:
     """--second-look: the job's second look at the held object (`app.jobs.second_look`)."""
-    p.add_argument("--second-look", action="store_true",
-                   help="after the lift, show the held object to the camera and imitate the place again from both "
-                        "views (template methods; off by default, see docs/jobs.md)")
+    p.add_argument("--second-look", action=argparse.BooleanOptionalAction, default=None,
+                   help="after the lift, show the held object to the camera and choose the place again from what it "
+                        "shows (template methods; default: on for hangs, off for the shelf; docs/jobs.md)")

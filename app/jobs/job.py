@@ -87,8 +87,9 @@ class JobConfig:
     table_z: float = 0.0  # m, the table top in the base frame (the cell's layout)
     hole_places: bool = True  # a hang also tries the places that put the handle hole seen in the cloud where
     # the demos had it, first (app.predict.hole_places); not for the oracle, whose poses are true
-    second_look: bool = False  # show the held object to the camera and imitate the place again (app.jobs.second_look):
-    # off, as on seeds 0-9 it hung no more mugs (0/10) and cost bowls (10/10 -> 7/10; docs/jobs.md)
+    second_look: bool | None = None  # show the held object to the camera and choose the place again from what
+    # it shows (app.jobs.second_look); None: on for hangs, where the held views show the handle hole
+    # (mug 5/20 -> 12/20), off otherwise (bowls 10/10 -> 7/10 when it imitated the place again; docs/jobs.md)
     look: SecondLookConfig = SecondLookConfig()
     attempts: int = 3  # grasps tried before the job gives up
     most_plans: int = 6  # full plans tried per attempt before the plan stage gives up
@@ -184,7 +185,7 @@ def run_job(t: Task, arm: Arm, gripper: Gripper, camera: DepthCamera, T_base_cam
     use_threads(config.threads)
     kin = UR5Kinematics(tcp_offset=ur_to_pose(arm.getTCPOffset()))
     placer = None
-    if config.second_look and config.method in TEMPLATE_METHODS:
+    if looks_again(config, t):
         def placer(cloud: np.ndarray, T_grasp: np.ndarray, starts: np.ndarray) -> list[Candidate]:
             return predict_place(t, cloud, T_grasp, config.method, T_base_fixture, config.demos, config.imitation,
                                  starts, center=config.center_grasp)
@@ -205,6 +206,17 @@ def run_job(t: Task, arm: Arm, gripper: Gripper, camera: DepthCamera, T_base_cam
     finally:
         scene.remove(OBJECT)
     return result
+
+
+def looks_again(config: JobConfig, t: Task) -> bool:
+    """Whether a job of task t takes the second look: as configured, by default for a hang (a fixture
+    with a peg); template methods only (not cpd, not the oracle)."""
+    on = _is_hang(t) if config.second_look is None else config.second_look
+    return on and config.method in TEMPLATE_METHODS
+
+
+def _is_hang(t: Task) -> bool:
+    return "peg_origin" in fixture(t.fixture).landmarks
 
 
 @dataclass
@@ -291,7 +303,7 @@ def _demos(job: _Job) -> list:
 def _looks_for_hole(job: _Job) -> bool:
     """Whether the job tries places built from the handle hole: a hang (a fixture with a peg) by a method
     that is not the oracle, with `hole_places` on."""
-    return job.config.hole_places and job.config.method != ORACLE and "peg_origin" in fixture(job.t.fixture).landmarks
+    return job.config.hole_places and job.config.method != ORACLE and _is_hang(job.t)
 
 
 def _plan(job: _Job, planner: Planner, options: list, cloud: np.ndarray):
