@@ -255,6 +255,8 @@ def _run(job: _Job) -> None:
         sent = transform_points(chosen.motion, cloud)  # where the object should end
         try:
             _pick(job, plan)
+            if job.placer is not None:
+                plan, sent = _look(job, planner, plan, chosen, options, cloud)
         except GraspMissed as miss:
             job.result.attempts.append({"attempt": attempt, **describe(chosen, str(miss))})
             if attempt == job.config.attempts:
@@ -265,8 +267,6 @@ def _run(job: _Job) -> None:
         job.result.attempts.append({"attempt": attempt, **describe(chosen, "held")})
         job.result.failed_stage = None
         break
-    if job.placer is not None:
-        plan, sent = _look(job, planner, plan, chosen, options, cloud)
     _place(job, plan, sent)
 
 
@@ -389,8 +389,11 @@ def _look(job: _Job, planner: Planner, plan, chosen: Candidate, options: list, c
             views = second_look(job.arm, job.camera, planner, job.T_base_cam, job.points, T_grasp, width,
                                 job.config.executor.end_tolerance, job.config.look, job.config.perception)
         except (ValueError, NoIKSolution) as exc:  # nothing seen, or no way to show it: go on with the first look
-            look, fused, tries = {"used": False, "why": str(exc)}, None, []
-        else:
+            views, look = None, {"used": False, "why": str(exc)}
+        if not job.gripper.object_detected:
+            raise GraspMissed(f"object dropped during the second look (gripper width {1000 * job.gripper.width:.1f} mm)")
+        fused, tries = None, []
+        if views is not None:
             points = np.concatenate([job.points, *views])
             fused = resample(points, len(cloud), job.config.perception.seed)
             starts = np.stack([c.T_base_fixture_seen for c in first])

@@ -54,8 +54,10 @@ class SimGripper(Gripper):
 
     @property
     def object_detected(self) -> bool:
+        """Live, as a Robotiq's object status: closed on something and not since closed past it (a held
+        object that slips out lets the fingers run on to closed)."""
         self.require_connected()
-        return self._detected
+        return self._detected and self.width > CLOSED_TOLERANCE
 
     def open(self, speed: float = 0.1, width: float | None = None) -> None:
         self.require_connected()
