@@ -108,8 +108,15 @@ def test_both_hangs_put_the_hole_in_the_same_place_facing_either_way(demos):
     mesh, _ = mug(1)
     hole = find_hole(one_view(mesh, yaw(-np.pi / 2)), [0.0, 0.0, 1.0], up=UP)
     T_fixture_hole = demo_hole(demos)
-    for F, seen in zip(FLIPS, hole_places(hole, T_fixture_hole)):
+    places = hole_places(hole, T_fixture_hole, turns=(0.0, 0.5))
+    assert len(places) == 4
+    for F, seen in zip(FLIPS, places[:2]):
         np.testing.assert_allclose(invert(seen) @ hole.T @ F, T_fixture_hole, atol=1e-9)
+    for F, seen in zip(FLIPS, places[2:]):  # swung about the peg: the hole's centre and axis stay on it
+        swung = invert(seen) @ hole.T @ F  # (4, 4) the hole in the fixture's frame
+        np.testing.assert_allclose(swung[:3, 3], T_fixture_hole[:3, 3], atol=1e-9)
+        np.testing.assert_allclose(swung[:3, 1], T_fixture_hole[:3, 1], atol=1e-9)
+        assert swung[:3, 0] @ T_fixture_hole[:3, 0] == pytest.approx(np.cos(0.5))
 
 
 def test_hole_pairs_come_first_and_only_where_the_grasp_carries_like_the_demos(demos):
@@ -118,6 +125,7 @@ def test_hole_pairs_come_first_and_only_where_the_grasp_carries_like_the_demos(d
     higher = make_pose(np.eye(3), 0.3 * d.place_anchor()[:3, 2])  # 30 cm up the fixture's z: no demo carried so
     far = Candidate(higher @ d.T_base_tcp, d.place_anchor(), d.T_base_fixture, 0.1, 1, 0)
     places = np.stack([d.place_anchor(), d.place_anchor() @ make_pose(np.eye(3), [0.0, 0.0, 0.5])])
+    assert [(p.grasp_rank, p.place_rank) for p in hole_pairs([far, grasp], places[::-1], demo_carries(demos))] == [(0, -2)]
     pairs = hole_pairs([grasp, far], places, demo_carries(demos))
     assert [(p.grasp_rank, p.place_rank) for p in pairs] == [(0, -1)]  # its own carry; the rest carry 20-50 cm off the demos'
     mesh, _ = mug(0)

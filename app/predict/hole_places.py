@@ -10,10 +10,12 @@ averaged over the demos whose hole is found (rotations by their chordal mean, th
 those more than OUTLIER from it). For a new cloud with
 hole T_base_hole the fixture would be, relative to the object as seen,
 
-    T_base_fixture_seen = T_base_hole @ F @ inv(T_fixture_hole)
+    T_base_fixture_seen = T_base_hole @ F @ Ry(-theta) @ inv(T_fixture_hole)
 
 with F the identity or the half-turn about the hole's radial x (the same hole, the mug facing the
-other way along the peg). A grasp is paired with such a place only when carrying it there is like
+other way along the peg), and Ry(theta) a turn about the hole's axis - the peg - by one of
+PEG_TURNS: the mug hung as the demos hung it, or swung about the peg, which it hangs from all the
+same (another way in for the gripper when the first is blocked; it swings back once let go). A grasp is paired with such a place only when carrying it there is like
 the demos' carries (`app.predict.feasibility.carries_like_demos`).
 """
 from __future__ import annotations
@@ -29,6 +31,7 @@ from app.predict.handle_hole import Hole, HoleConfig, find_hole
 from hardware.se3 import invert, make_pose
 
 FLIPS = (np.eye(4), make_pose(np.diag([1.0, -1.0, -1.0]), np.zeros(3)))  # F: as found, half-turn about x
+PEG_TURNS = (0.0, 0.35, -0.35, 0.7, -0.7)  # rad about the peg, in the order tried
 OUTLIER = np.radians(10.0)  # a demo's hole turned this far from the others' mean is left out of it
 UP = np.array([0.0, 0.0, 1.0])  # the table's normal in the base frame: a mug standing on it has this axis
 HOLE_RANK = -1  # place ranks of hole places count down from this: -1, -2 (imitated places are 0, 1, ...)
@@ -50,14 +53,21 @@ def demo_hole(demos, config: HoleConfig = HoleConfig()) -> np.ndarray | None:
     return make_pose(turns[near].mean().as_matrix(), T[near, :3, 3].mean(axis=0))
 
 
-def hole_places(hole: Hole, T_fixture_hole: np.ndarray) -> np.ndarray:
-    """(2, 4, 4) T_base_fixture_seen that hang the seen hole as the demos did, both ways along the peg."""
-    return np.stack([hole.T @ F @ invert(T_fixture_hole) for F in FLIPS])
+def about_peg(theta: float) -> np.ndarray:
+    """(4, 4) the turn Ry(theta) about the hole's axis y."""
+    c, s = np.cos(theta), np.sin(theta)
+    return make_pose(np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]]), np.zeros(3))
+
+
+def hole_places(hole: Hole, T_fixture_hole: np.ndarray, turns: tuple[float, ...] = PEG_TURNS) -> np.ndarray:
+    """(K, 4, 4) T_base_fixture_seen that hang the seen hole as the demos did, both ways along the peg,
+    turned about it by each of `turns` (K = 2 len(turns), the turns' order first)."""
+    return np.stack([hole.T @ F @ about_peg(-theta) @ invert(T_fixture_hole) for theta in turns for F in FLIPS])
 
 
 def hole_pairs(options: list[Candidate], places: np.ndarray, carried: list[np.ndarray]) -> list[Candidate]:
-    """Each distinct grasp of `options` (in their order) with each hole place (K, 4, 4) it can carry
-    like the demos; their place_rank is HOLE_RANK - k."""
+    """Each hole place (K, 4, 4) in its order, with each distinct grasp of `options` (in theirs) that
+    can carry to it like the demos; the pair's place_rank is HOLE_RANK - k."""
     pairs, seen = [], set()
     for c in options:
         if c.grasp_rank in seen:
@@ -65,7 +75,7 @@ def hole_pairs(options: list[Candidate], places: np.ndarray, carried: list[np.nd
         seen.add(c.grasp_rank)
         ok = carries_like_demos(c.T_base_tcp, carried)(places)  # (K,)
         pairs += [replace(c, T_base_fixture_seen=places[k], place_rank=HOLE_RANK - int(k)) for k in np.flatnonzero(ok)]
-    return pairs
+    return sorted(pairs, key=lambda c: -c.place_rank)  # stable: the grasps' order within a place
 
 
 def with_hole_pairs(options: list[Candidate], points: np.ndarray, demos, config: HoleConfig = HoleConfig()
