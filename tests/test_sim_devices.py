@@ -109,6 +109,21 @@ def test_gripper_closes_on_nothing_and_opens(rig):
         gripper.open(width=0.2)
 
 
+def test_a_held_object_that_goes_is_no_longer_detected(rig):
+    """Closed on a 3 cm box between the pads: detected; the box gone, the fingers run on to closed and
+    object_detected says so at once (a Robotiq's live object status), with no new command."""
+    from hardware.se3 import ur_to_pose
+
+    world, _, arm, gripper = rig
+    T = ur_to_pose(arm.getActualTCPPose())
+    box = world.add_box((0.03, 0.03, 0.03), T[:3, 3] + T[:3, :3] @ [0.0, 0.0, 0.01])
+    assert gripper.close(force=30.0) and gripper.object_detected
+    assert abs(gripper.width - 0.03) < 0.004
+    world.remove(box)
+    world.step(240)
+    assert gripper.width < 0.002 and not gripper.object_detected
+
+
 UR5_DH = {"d": [0.089159, 0, 0, 0.10915, 0.09465, 0.0823], "a": [0, -0.425, -0.39225, 0, 0, 0],
           "alpha": [np.pi / 2, 0, 0, np.pi / 2, -np.pi / 2, 0]}  # Universal Robots' published UR5 parameters
 

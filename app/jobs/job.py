@@ -264,6 +264,9 @@ def _run(job: _Job) -> None:
             _recover(job, planner, plan)
             options = [c for c in options if c.grasp_rank != chosen.grasp_rank]
             continue
+        except JobFailed as failed:  # the attempt ends the job: its record says how
+            job.result.attempts.append({"attempt": attempt, **describe(chosen, str(failed))})
+            raise
         job.result.attempts.append({"attempt": attempt, **describe(chosen, "held")})
         job.result.failed_stage = None
         break
