@@ -78,7 +78,7 @@ def test_the_second_look_fuses_a_held_mug_onto_its_mesh_without_the_gripper(monk
     import trimesh
     from scipy.spatial import cKDTree
 
-    import app.jobs.job as job_module
+    import app.jobs.held_place as job_module
     from app.jobs.job import JobConfig
     from app.motion.scene import PlanningScene
     from app.sim.cell import CellConfig, SimCell

@@ -1,0 +1,66 @@
+"""One job's devices, settings and record, passed between its steps (`app.jobs.job`)."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+from app.jobs.record import JobHooks, JobResult, stage
+from app.jobs.settings import JobConfig, is_hang
+from app.motion.place_line import peg_line_direction
+from app.motion.scene import PlanningScene
+from app.predict.candidates import Candidate
+from app.predict.methods import ORACLE
+from app.predict.predict import Prediction
+from app.tasks.library import DEMOS_DIR, task_demos
+from app.tasks.task import Task
+from hardware.interfaces import Arm, DepthCamera, Frame, Gripper
+from hardware.kinematics import UR5Kinematics
+from hardware.se3 import transform_points
+
+Predictor = Callable[[np.ndarray], Prediction]  # object cloud (N, 3), base frame -> grasp and place
+# the held object's cloud as it stood when grasped, the grasp, places to start from -> place candidates
+Placer = Callable[[np.ndarray, np.ndarray, np.ndarray], list[Candidate]]
+
+
+@dataclass
+class JobContext:
+    """One job's devices, settings and record, passed between its steps."""
+
+    t: Task
+    arm: Arm
+    gripper: Gripper
+    camera: DepthCamera
+    T_base_cam: np.ndarray
+    T_base_fixture: np.ndarray
+    scene: PlanningScene
+    kin: UR5Kinematics
+    config: JobConfig
+    hooks: JobHooks
+    predictor: Predictor
+    result: JobResult
+    placer: Placer | None = None  # imitates the place again after the second look (None: no second look)
+    first: Frame | None = None  # the first frame: the fixture without the object
+    points: np.ndarray | None = None  # the last look's object points (M, 3) before resampling
+
+    def stage(self, name: str):
+        """Time stage `name` and turn its expected errors into JobFailed (`app.jobs.record.stage`)."""
+        return stage(self.result, name, self.hooks)
+
+    def demos(self) -> list:
+        """The task's demos (for the hole they hung, `app.predict.hole_places`)."""
+        return task_demos(self.config.demos or DEMOS_DIR / self.t.demos)
+
+    def looks_for_hole(self) -> bool:
+        """Whether the job tries places built from the handle hole: a hang by a method that is not the
+        oracle, with `hole_places` on."""
+        return self.config.hole_places and self.config.method != ORACLE and is_hang(self.t)
+
+    def place_line(self, cloud: np.ndarray) -> Callable[[Candidate], np.ndarray]:
+        """Pair -> the direction of its line onto the fixture: one on which the object's seen points
+        (N, 3), carried there, clear the fixture (a handle threads the peg; `app.motion.place_line`)."""
+        def direction(c: Candidate) -> np.ndarray:
+            return peg_line_direction(transform_points(c.motion, cloud), self.T_base_fixture, self.t.fixture,
+                                      self.config.executor.place_distance)
+        return direction

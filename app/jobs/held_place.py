@@ -1,0 +1,91 @@
+"""The place chosen after the second look (`app.jobs.second_look`): the handle hole a held view shows,
+the place imitated again on the fused views, and the first look's places for the held grasp, in
+that order; the rest of the job planned from where the arm is."""
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from app.jobs.context import JobContext
+from app.jobs.record import GraspMissed, JobFailed, ur
+from app.jobs.second_look import second_look
+from app.motion.executor import FingerWidths, Planner
+from app.motion.ik import NoIKSolution
+from app.motion.place_line import above_peg
+from app.perception import resample
+from app.predict.candidates import Candidate
+from app.predict.hole_places import with_hole_pairs
+from hardware.se3 import transform_points
+
+
+def look_and_place(job: JobContext, planner: Planner, plan, chosen: Candidate, options: list, cloud: np.ndarray):
+    """The second look (`app.jobs.second_look`): show the held object, imitate the place again on both
+    views, and plan the rest from where the arm is - with the first look's places for this grasp when
+    no new one plans (or nothing was seen). Returns the plan to carry on with and where the object
+    should end (`sent`)."""
+    T_grasp, width = plan.T_base_grasp, job.gripper.width
+    widths = FingerWidths(width, width, width + job.config.release_clearance)
+    T_above = above_peg(job.T_base_fixture, job.t.fixture, job.config.executor.peg_clearance)
+    first = [chosen, *(c for c in options if c.grasp_rank == chosen.grasp_rank and c.place_rank != chosen.place_rank)]
+    with job.stage("look"):
+        holes = [(c, cloud) for c in first if c.place_rank < 0]  # the first look's hole places, first
+        try:
+            views = second_look(job.arm, job.camera, planner, job.T_base_cam, job.points, T_grasp, width,
+                                job.config.executor.end_tolerance, job.config.look, job.config.perception)
+        except (ValueError, NoIKSolution) as exc:  # nothing seen, or no way to show it: go on with the first look
+            views, look = None, {"used": False, "why": str(exc)}
+        if not job.gripper.object_detected:
+            raise GraspMissed(f"object dropped during the second look (gripper width {1000 * job.gripper.width:.1f} mm)")
+        fused, tries = None, []
+        if views is not None:
+            points = np.concatenate([job.points, *views])
+            fused = resample(points, len(cloud), job.config.perception.seed)
+            starts = np.stack([c.T_base_fixture_seen for c in first])
+            look = {"used": False, "new_points": int(sum(len(v) for v in views))}
+            tries = [(c, fused) for c in job.placer(fused, chosen.T_base_tcp, starts)[: job.config.most_plans]]
+            if job.looks_for_hole():
+                held, look["hole"] = held_hole(job, chosen, views if holes else [*views, points])
+                holes = [(c, fused) for c in held] + holes
+        tries = holes + tries + [(c, cloud) for c in first[: job.config.most_plans] if c.place_rank >= 0]
+        q, whys, fused_whys = job.arm.getActualQ(), [], []
+        for c, seen in tries:
+            c = replace(c, T_base_fixture=T_above)  # placed clear of a peg, as the first look's pairs
+            try:
+                rest = planner.place_from(q, T_grasp, c.motion @ T_grasp, job.place_line(seen)(c), widths)
+            except NoIKSolution as exc:
+                whys.append(str(exc))
+                if seen is fused:
+                    fused_whys.append(whys[-1])
+                continue
+            if seen is fused:
+                look.update({"used": True, "place_rank": c.place_rank, **moved(plan, rest)})
+            elif fused is not None:  # why the fused cloud's best place was not taken
+                look["why"] = fused_whys[0] if fused_whys else "no place"
+            job.result.look = look
+            job.result.poses["place"] = ur(rest.T_base_place)
+            return rest, transform_points(c.motion, seen)
+        if fused is not None:
+            look["why"] = fused_whys[0] if fused_whys else "no place"
+        job.result.look = look
+        raise JobFailed(f"none of {len(tries)} places could be planned for the held grasp; the best: "
+                        f"{whys[0] if whys else 'no place'}")
+
+
+def held_hole(job: JobContext, chosen: Candidate, clouds: list[np.ndarray]) -> tuple[list[Candidate], dict]:
+    """The hole places for the held grasp from the first of `clouds` (grasp-time frame) that shows the
+    hole - a view alone shows the object as it sits in the hand now, which may have turned on closing -
+    and what was found (with the index of that cloud)."""
+    found = {"found": False, "why": "no view shows the handle hole"}
+    for i, points in enumerate(clouds):
+        pairs, found = with_hole_pairs([chosen], points, job.demos())
+        if found["found"]:
+            return [c for c in pairs if c.place_rank < 0], {**found, "view": i}
+    return [], found
+
+
+def moved(plan, rest) -> dict:
+    """How far the second look moved the place from the first plan's (or that the first had none)."""
+    if plan.T_base_place is None:
+        return {"pick_only": True}
+    return {"place_moved_m": round(float(np.linalg.norm(rest.T_base_place[:3, 3] - plan.T_base_place[:3, 3])), 4)}
