@@ -8,7 +8,7 @@ import numpy as np
 
 from app.jobs.record import JobHooks, JobResult, stage
 from app.jobs.settings import JobConfig, is_hang
-from app.motion.place_line import peg_line_direction
+from app.motion.place_line import fixture_approach, peg_line_direction
 from app.motion.scene import PlanningScene
 from app.predict.candidates import Candidate
 from app.predict.methods import ORACLE
@@ -59,8 +59,12 @@ class JobContext:
 
     def place_line(self, cloud: np.ndarray) -> Callable[[Candidate], np.ndarray]:
         """Pair -> the direction of its line onto the fixture: one on which the object's seen points
-        (N, 3), carried there, clear the fixture (a handle threads the peg; `app.motion.place_line`)."""
+        (N, 3), carried there, clear the fixture (a handle threads the peg; `app.motion.place_line`);
+        for a hole place (place_rank < 0) the fixture's own approach, along the peg through the hole
+        it saw - stray points at the hole's rim would tilt it onto the handle's bar."""
         def direction(c: Candidate) -> np.ndarray:
+            if c.place_rank < 0:
+                return fixture_approach(self.T_base_fixture, self.t.fixture)
             return peg_line_direction(transform_points(c.motion, cloud), self.T_base_fixture, self.t.fixture,
                                       self.config.executor.place_distance)
         return direction

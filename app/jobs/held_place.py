@@ -29,7 +29,7 @@ def look_and_place(job: JobContext, planner: Planner, plan, chosen: Candidate, o
     T_above = above_peg(job.T_base_fixture, job.t.fixture, job.config.executor.peg_clearance)
     first = [chosen, *(c for c in options if c.grasp_rank == chosen.grasp_rank and c.place_rank != chosen.place_rank)]
     with job.stage("look"):
-        holes = [(c, cloud) for c in first if c.place_rank < 0]  # the first look's hole places, first
+        holes = [(c, cloud, False) for c in first if c.place_rank < 0]  # the first look's hole places, first
         try:
             views = second_look(job.arm, job.camera, planner, job.T_base_cam, job.points, T_grasp, width,
                                 job.config.executor.end_tolerance, job.config.look, job.config.perception)
@@ -37,51 +37,54 @@ def look_and_place(job: JobContext, planner: Planner, plan, chosen: Candidate, o
             views, look = None, {"used": False, "why": str(exc)}
         if not job.gripper.object_detected:
             raise GraspMissed(f"object dropped during the second look (gripper width {1000 * job.gripper.width:.1f} mm)")
-        fused, tries = None, []
+        tries = []  # (pair, the cloud it moves, whether the look gave it)
         if views is not None:
             points = np.concatenate([job.points, *views])
             fused = resample(points, len(cloud), job.config.perception.seed)
             starts = np.stack([c.T_base_fixture_seen for c in first])
             look = {"used": False, "new_points": int(sum(len(v) for v in views))}
-            tries = [(c, fused) for c in job.placer(fused, chosen.T_base_tcp, starts)[: job.config.most_plans]]
+            tries = [(c, fused, True) for c in job.placer(fused, chosen.T_base_tcp, starts)[: job.config.most_plans]]
             if job.looks_for_hole():
-                held, look["hole"] = held_hole(job, chosen, views if holes else [*views, points])
-                holes = [(c, fused) for c in held] + holes
-        tries = holes + tries + [(c, cloud) for c in first[: job.config.most_plans] if c.place_rank >= 0]
-        q, whys, fused_whys = job.arm.getActualQ(), [], []
-        for c, seen in tries:
+                held, look["hole"], shown = held_hole(job, chosen, views if holes else [*views, points])
+                shown = resample(shown, len(cloud), job.config.perception.seed)  # the mug as that cloud shows it
+                holes = [(c, shown, True) for c in held] + holes
+        tries = holes + tries + [(c, cloud, False) for c in first[: job.config.most_plans] if c.place_rank >= 0]
+        q, whys, look_whys = job.arm.getActualQ(), [], []
+        for c, seen, looked in tries:
             c = replace(c, T_base_fixture=T_above)  # placed clear of a peg, as the first look's pairs
             try:
                 rest = planner.place_from(q, T_grasp, c.motion @ T_grasp, job.place_line(seen)(c), widths)
             except NoIKSolution as exc:
                 whys.append(str(exc))
-                if seen is fused:
-                    fused_whys.append(whys[-1])
+                if looked:
+                    look_whys.append(whys[-1])
                 continue
-            if seen is fused:
+            if looked:
                 look.update({"used": True, "place_rank": c.place_rank, **moved(plan, rest)})
-            elif fused is not None:  # why the fused cloud's best place was not taken
-                look["why"] = fused_whys[0] if fused_whys else "no place"
+            elif views is not None:  # why the look's best place was not taken
+                look["why"] = look_whys[0] if look_whys else "no place"
             job.result.look = look
             job.result.poses["place"] = ur(rest.T_base_place)
             return rest, transform_points(c.motion, seen)
-        if fused is not None:
-            look["why"] = fused_whys[0] if fused_whys else "no place"
+        if views is not None:
+            look["why"] = look_whys[0] if look_whys else "no place"
         job.result.look = look
         raise JobFailed(f"none of {len(tries)} places could be planned for the held grasp; the best: "
                         f"{whys[0] if whys else 'no place'}")
 
 
-def held_hole(job: JobContext, chosen: Candidate, clouds: list[np.ndarray]) -> tuple[list[Candidate], dict]:
-    """The hole places for the held grasp from the first of `clouds` (grasp-time frame) that shows the
-    hole - a view alone shows the object as it sits in the hand now, which may have turned on closing -
-    and what was found (with the index of that cloud)."""
+def held_hole(job: JobContext, chosen: Candidate, clouds: list[np.ndarray]
+              ) -> tuple[list[Candidate], dict, np.ndarray]:
+    """The hole places for the held grasp from the first of `clouds` (M_i, 3), grasp-time frame, that
+    shows the hole - a view alone shows the object as it sits in the hand now, which may have turned
+    on closing - what was found (with the index of that cloud), and that cloud: its points, not a
+    fusion that may hold the mug twice, choose the line onto the peg (`app.motion.place_line`)."""
     found = {"found": False, "why": "no view shows the handle hole"}
     for i, points in enumerate(clouds):
         pairs, found = with_hole_pairs([chosen], points, job.demos())
         if found["found"]:
-            return [c for c in pairs if c.place_rank < 0], {**found, "view": i}
-    return [], found
+            return [c for c in pairs if c.place_rank < 0], {**found, "view": i}, points
+    return [], found, clouds[-1]
 
 
 def moved(plan, rest) -> dict:

@@ -70,6 +70,11 @@ def above_peg(T_base_fixture: np.ndarray, fixture_name: str, clearance: float) -
     return moved
 
 
+def fixture_approach(T_base_fixture: np.ndarray, fixture_name: str) -> np.ndarray:
+    """Unit direction (3,), base frame, of the fixture's own line onto it (along a peg: the peg's axis)."""
+    return T_base_fixture[:3, :3] @ np.asarray(fixture(fixture_name).landmarks["approach"], float)
+
+
 def peg_line_direction(points: np.ndarray, T_base_fixture: np.ndarray, fixture_name: str, distance: float,
                        margin: float = 0.001) -> np.ndarray:
     """Unit direction (3,), base frame, of the line onto the fixture for the held object's points
@@ -78,7 +83,7 @@ def peg_line_direction(points: np.ndarray, T_base_fixture: np.ndarray, fixture_n
     f = fixture(fixture_name)
     approach = np.asarray(f.landmarks["approach"], float)
     if "peg_tip" not in f.landmarks:
-        return T_base_fixture[:3, :3] @ approach
+        return fixture_approach(T_base_fixture, fixture_name)
     local = transform_points(invert(T_base_fixture), np.asarray(points, float))  # (N, 3) fixture frame
     scene = _fixture_scene(fixture_name)
     for d in directions(approach):
