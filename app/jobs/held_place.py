@@ -10,7 +10,7 @@ import numpy as np
 from app.jobs.context import JobContext
 from app.jobs.record import GraspMissed, JobFailed, ur
 from app.jobs.second_look import second_look
-from app.motion.executor import FingerWidths, Planner
+from app.motion.executor import OBJECT, FingerWidths, Planner
 from app.motion.ik import NoIKSolution
 from app.motion.place_line import above_peg
 from app.perception import resample
@@ -41,6 +41,8 @@ def look_and_place(job: JobContext, planner: Planner, plan, chosen: Candidate, o
         if views is not None:
             points = np.concatenate([job.points, *views])
             fused = resample(points, len(cloud), job.config.perception.seed)
+            # the carried object's model: what the first look saw and what the held views show
+            job.scene.add_cloud(OBJECT, np.concatenate([job.scene.solids[OBJECT], *views]))
             starts = np.stack([c.T_base_fixture_seen for c in first])
             look = {"used": False, "new_points": int(sum(len(v) for v in views))}
             tries = [(c, fused, True) for c in job.placer(fused, chosen.T_base_tcp, starts)[: job.config.most_plans]]
