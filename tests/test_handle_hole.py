@@ -8,7 +8,7 @@ from app.objects import generate, semantics, split
 from app.predict.candidates import Candidate
 from app.predict.feasibility import demo_carries
 from app.predict.handle_hole import find_hole
-from app.predict.hole_places import FLIPS, UP, demo_hole, hole_pairs, hole_places, with_hole_pairs
+from app.predict.hole_places import FLIPS, UP, demo_hang, demo_hole, hole_pairs, hole_places, with_hole_pairs
 from app.tasks.library import DEMOS_DIR, task_demos
 from hardware.se3 import invert, make_pose, transform_points
 
@@ -129,5 +129,5 @@ def test_hole_pairs_come_first_and_only_where_the_grasp_carries_like_the_demos(d
     pairs = hole_pairs([grasp, far], places, demo_carries(demos))
     assert [(p.grasp_rank, p.place_rank) for p in pairs] == [(0, -1)]  # its own carry; the rest carry 20-50 cm off the demos'
     mesh, _ = mug(0)
-    options, found = with_hole_pairs([grasp], one_view(mesh, yaw(0.0)), demos)  # the handle hidden
+    options, found = with_hole_pairs([grasp], one_view(mesh, yaw(0.0)), demo_hang(demos))  # the handle hidden
     assert options == [grasp] and found["found"] is False

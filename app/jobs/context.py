@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Callable
 
 import numpy as np
@@ -11,6 +12,7 @@ from app.jobs.settings import JobConfig, is_hang
 from app.motion.place_line import fixture_approach, peg_line_direction
 from app.motion.scene import PlanningScene
 from app.predict.candidates import Candidate
+from app.predict.hole_places import DemoHang, demo_hang
 from app.predict.methods import ORACLE
 from app.predict.predict import Prediction
 from app.tasks.library import DEMOS_DIR, task_demos
@@ -48,9 +50,11 @@ class JobContext:
         """Time stage `name` and turn its expected errors into JobFailed (`app.jobs.record.stage`)."""
         return stage(self.result, name, self.hooks)
 
-    def demos(self) -> list:
-        """The task's demos (for the hole they hung, `app.predict.hole_places`)."""
-        return task_demos(self.config.demos or DEMOS_DIR / self.t.demos)
+    @cached_property
+    def hang(self) -> DemoHang:
+        """Where the task's demos hung the handle hole and how they carried (`app.predict.hole_places`),
+        read and computed once per job."""
+        return demo_hang(task_demos(self.config.demos or DEMOS_DIR / self.t.demos))
 
     def looks_for_hole(self) -> bool:
         """Whether the job tries places built from the handle hole: a hang by a method that is not the

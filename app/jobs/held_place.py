@@ -48,8 +48,9 @@ def look_and_place(job: JobContext, planner: Planner, plan, chosen: Candidate, o
             tries = [(c, fused, True) for c in job.placer(fused, chosen.T_base_tcp, starts)[: job.config.most_plans]]
             if job.looks_for_hole():
                 held, look["hole"], shown = held_hole(job, chosen, views if holes else [*views, points])
-                shown = resample(shown, len(cloud), job.config.perception.seed)  # the mug as that cloud shows it
-                holes = [(c, shown, True) for c in held] + holes
+                if held:
+                    shown = resample(shown, len(cloud), job.config.perception.seed)  # the mug as that cloud shows it
+                    holes = [(c, shown, True) for c in held] + holes
         tries = holes + tries + [(c, cloud, False) for c in first[: job.config.most_plans] if c.place_rank >= 0]
         q, whys, look_whys = job.arm.getActualQ(), [], []
         for c, seen, looked in tries:
@@ -76,17 +77,17 @@ def look_and_place(job: JobContext, planner: Planner, plan, chosen: Candidate, o
 
 
 def held_hole(job: JobContext, chosen: Candidate, clouds: list[np.ndarray]
-              ) -> tuple[list[Candidate], dict, np.ndarray]:
+              ) -> tuple[list[Candidate], dict, np.ndarray | None]:
     """The hole places for the held grasp from the first of `clouds` (M_i, 3), grasp-time frame, that
     shows the hole - a view alone shows the object as it sits in the hand now, which may have turned
     on closing - what was found (with the index of that cloud), and that cloud: its points, not a
     fusion that may hold the mug twice, choose the line onto the peg (`app.motion.place_line`)."""
     found = {"found": False, "why": "no view shows the handle hole"}
     for i, points in enumerate(clouds):
-        pairs, found = with_hole_pairs([chosen], points, job.demos())
+        pairs, found = with_hole_pairs([chosen], points, job.hang)
         if found["found"]:
             return [c for c in pairs if c.place_rank < 0], {**found, "view": i}, points
-    return [], found, clouds[-1]
+    return [], found, None
 
 
 def moved(plan, rest) -> dict:

@@ -140,7 +140,7 @@ def _imitate(job: JobContext, cloud: np.ndarray) -> list:
         options = [replace(c, T_base_tcp=backed_off_table(c.T_base_tcp, cloud, job.config.table_z))
                    for c in pred.options()]
         if job.looks_for_hole():
-            options, job.result.hole = with_hole_pairs(options, job.points, job.demos())
+            options, job.result.hole = with_hole_pairs(options, job.points, job.hang)
     job.result.poses = {"grasp": ur(pred.T_base_tcp), "place": ur(pred.T_base_tcp_place)}
     return options
 

@@ -20,7 +20,7 @@ the demos' carries (`app.predict.feasibility.carries_like_demos`).
 """
 from __future__ import annotations
 
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy.spatial.transform import Rotation
@@ -53,6 +53,20 @@ def demo_hole(demos, config: HoleConfig = HoleConfig()) -> np.ndarray | None:
     return make_pose(turns[near].mean().as_matrix(), T[near, :3, 3].mean(axis=0))
 
 
+@dataclass(frozen=True)
+class DemoHang:
+    """What the demos say about hanging by the hole: where they hung it (`demo_hole`; None when no
+    demo's cloud shows it) and how they carried their objects (`demo_carries`)."""
+
+    T_fixture_hole: np.ndarray | None
+    carried: list[np.ndarray]
+
+
+def demo_hang(demos, config: HoleConfig = HoleConfig()) -> DemoHang:
+    """The demos' `DemoHang`, computed once for as many clouds as need it."""
+    return DemoHang(demo_hole(demos, config), demo_carries(demos))
+
+
 def about_peg(theta: float) -> np.ndarray:
     """(4, 4) the turn Ry(theta) about the hole's axis y."""
     c, s = np.cos(theta), np.sin(theta)
@@ -78,18 +92,17 @@ def hole_pairs(options: list[Candidate], places: np.ndarray, carried: list[np.nd
     return sorted(pairs, key=lambda c: -c.place_rank)  # stable: the grasps' order within a place
 
 
-def with_hole_pairs(options: list[Candidate], points: np.ndarray, demos, config: HoleConfig = HoleConfig()
-                    ) -> tuple[list[Candidate], dict]:
+def with_hole_pairs(options: list[Candidate], points: np.ndarray, hang: DemoHang,
+                    config: HoleConfig = HoleConfig()) -> tuple[list[Candidate], dict]:
     """The hole pairs of a mug's raw points (M, 3) (z towards the best option's grasp) before `options`,
     and what was found (JSON-ready); `options` alone when the points or the demos show no hole."""
     if not options:
         return options, {"found": False, "why": "no grasp to pair"}
-    T_fixture_hole = demo_hole(demos, config)
-    if T_fixture_hole is None:
+    if hang.T_fixture_hole is None:
         return options, {"found": False, "why": "no demo's cloud shows its hole"}
     hole = find_hole(points, options[0].T_base_tcp[:3, 3], config, up=UP)
     if hole is None:
         return options, {"found": False, "why": "the cloud shows no handle hole"}
-    pairs = hole_pairs(options, hole_places(hole, T_fixture_hole), demo_carries(demos))
+    pairs = hole_pairs(options, hole_places(hole, hang.T_fixture_hole), hang.carried)
     return pairs + options, {"found": True, "handle_points": int(hole.handle_points), "pairs": len(pairs),
                              "center": np.round(hole.T[:3, 3], 4).tolist()}
