@@ -27,8 +27,9 @@ class CellLayout:
         return make_pose(rotvec_to_matrix([0.0, 0.0, yaw]), [x, y, 0.0])
 
 
-def add_fixtures(client: int, layout: CellLayout) -> dict[str, int]:
-    """Build the rack and the shelf in a PyBullet client at their configured poses; {name: body}."""
+def add_fixtures(client: int, layout: CellLayout, margin: float | None = None) -> dict[str, int]:
+    """Build the rack and the shelf in a PyBullet client at their configured poses, their hulls grown
+    by `margin` (m; None: Bullet's default); {name: body}."""
     from app.objects import fixture
     from app.objects.collision import collision_model, visual_model
     from hardware.bullet import add_mesh
@@ -37,5 +38,5 @@ def add_fixtures(client: int, layout: CellLayout) -> dict[str, int]:
     for name in ("rack", "shelf"):
         mesh = fixture(name).mesh
         bodies[name] = add_mesh(client, visual_model(mesh), collision_model(mesh), layout.fixture_pose(name),
-                                rgba=(0.55, 0.4, 0.3, 1))
+                                rgba=(0.55, 0.4, 0.3, 1), margin=margin)
     return bodies

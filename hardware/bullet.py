@@ -85,8 +85,9 @@ def add_box(client: int, size, center, mass: float = 0.0, rgba=(0.6, 0.6, 0.6, 1
 
 
 def add_mesh(client: int, visual_obj: Path, collision_obj: Path, T_world_body: np.ndarray, mass: float = 0.0,
-             scale: float = 1.0, rgba=(0.6, 0.7, 0.9, 1), friction: float = 0.8) -> int:
-    """A body from a visual OBJ and a collision OBJ (one convex hull per `o` block)."""
+             scale: float = 1.0, rgba=(0.6, 0.7, 0.9, 1), friction: float = 0.8, margin: float | None = None) -> int:
+    """A body from a visual OBJ and a collision OBJ (one convex hull per `o` block); `margin` (m): the
+    collision margin of its hulls, which Bullet grows them by (None: Bullet's default, 1 mm)."""
     s = [scale] * 3
     col = p.createCollisionShape(p.GEOM_MESH, fileName=str(collision_obj), meshScale=s, physicsClientId=client)
     vis = p.createVisualShape(p.GEOM_MESH, fileName=str(visual_obj), meshScale=s, rgbaColor=rgba,
@@ -95,6 +96,8 @@ def add_mesh(client: int, visual_obj: Path, collision_obj: Path, T_world_body: n
     body = p.createMultiBody(mass, col, vis, basePosition=pos, baseOrientation=quat, physicsClientId=client)
     p.changeDynamics(body, -1, lateralFriction=friction, spinningFriction=0.002, rollingFriction=0.0005,
                      physicsClientId=client)
+    if margin is not None:
+        p.changeDynamics(body, -1, collisionMargin=margin, physicsClientId=client)
     return body
 
 

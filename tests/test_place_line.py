@@ -19,6 +19,14 @@ def test_above_peg_moves_the_fixture_along_the_pegs_upward_normal():
     assert np.array_equal(above_peg(T, "shelf", 0.006), T)  # no peg, nothing to clear
 
 
+def test_short_of_the_hang_moves_the_fixture_out_along_the_peg_towards_its_tip():
+    T = make_pose(rotvec_to_matrix([0.0, 0.0, np.pi]), [0.55, 0.40, 0.0])
+    d = T[:3, :3].T @ (above_peg(T, "rack", 0.006, short=0.01)[:3, 3] - T[:3, 3])  # fixture frame
+    assert d @ A == pytest.approx(0.01) and np.linalg.norm(d - (d @ A) * A) == pytest.approx(0.006)
+    tip, root = np.asarray(RACK["peg_tip"]), np.asarray(RACK["peg_origin"])
+    assert np.linalg.norm(tip - (root + d)) < np.linalg.norm(tip - root)  # nearer the tip
+
+
 def test_directions_start_with_the_approach_and_tilt_about_it():
     ds = directions(A)
     assert np.allclose(ds[0], A) and np.allclose(np.linalg.norm(ds, axis=1), 1.0)

@@ -26,7 +26,8 @@ def look_and_place(job: JobContext, planner: Planner, plan, chosen: Candidate, o
     should end (`sent`)."""
     T_grasp, width = plan.T_base_grasp, job.gripper.width
     widths = FingerWidths(width, width, width + job.config.release_clearance)
-    T_above = above_peg(job.T_base_fixture, job.t.fixture, job.config.executor.peg_clearance)
+    T_above = above_peg(job.T_base_fixture, job.t.fixture, job.config.executor.peg_clearance,
+                        job.config.executor.peg_short)
     first = [chosen, *(c for c in options if c.grasp_rank == chosen.grasp_rank and c.place_rank != chosen.place_rank)]
     with job.stage("look"):
         holes = [(c, cloud, False) for c in first if c.place_rank < 0]  # the first look's hole places, first

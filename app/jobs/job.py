@@ -152,7 +152,8 @@ def _plan(job: JobContext, planner: Planner, options: list, cloud: np.ndarray):
         held, c, stroke = held_width(T_grasp, cloud), job.config, job.gripper.stroke
         return FingerWidths(min(stroke, held + c.approach_clearance), held, min(stroke, held + c.release_clearance))
 
-    T_above = above_peg(job.T_base_fixture, job.t.fixture, job.config.executor.peg_clearance)
+    T_above = above_peg(job.T_base_fixture, job.t.fixture, job.config.executor.peg_clearance,
+                        job.config.executor.peg_short)
     if T_above is not job.T_base_fixture:  # a peg: placed clear of it; other fixtures' pairs stay bit for bit
         options = [replace(c, T_base_fixture=T_above) for c in options]
     with job.stage("plan"):

@@ -48,6 +48,7 @@ class ExecutorConfig:
     place_distance: float = 0.10  # m, pre-place back along the fixture's approach direction
     peg_clearance: float = 0.012  # m the object is placed above its hang on a peg, and dropped (app.motion.place_line):
     # at 6 mm a mug turned 1-6 degrees in the grasp on the way rested its handle on the peg and fell (5 of 50)
+    peg_short: float = 0.0  # m the object is placed short of its hang, out along the peg
     retreat_distance: float = 0.10  # m, back along the tool axis after release
     joint_speed: float = 1.05  # rad/s on transits (ur_rtde's moveJ default)
     joint_acceleration: float = 1.4  # rad/s^2

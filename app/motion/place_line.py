@@ -55,18 +55,19 @@ def hits(points: np.ndarray, direction: np.ndarray, scene, distance: float, marg
     return int((signed_distance(scene, swept.reshape(-1, 3)) < margin).sum())
 
 
-def above_peg(T_base_fixture: np.ndarray, fixture_name: str, clearance: float) -> np.ndarray:
+def above_peg(T_base_fixture: np.ndarray, fixture_name: str, clearance: float, short: float = 0.0) -> np.ndarray:
     """The fixture's pose moved by `clearance` along the normal of its peg that points most up
-    (n = z - (z . a) a, normalised, a the peg's direction): an object placed for the moved fixture
-    hangs that far above its hang, slides along the peg without resting on it, and drops the last
-    few millimetres when let go. Fixtures without a peg are returned as they are."""
+    (n = z - (z . a) a, normalised, a the peg's direction) and by `short` out along the peg: an object
+    placed for the moved fixture hangs that far above its hang and that far nearer the peg's tip,
+    slides along the peg without resting on it, and drops (and slides down the peg) when let go.
+    Fixtures without a peg are returned as they are."""
     f = fixture(fixture_name)
-    if "peg_tip" not in f.landmarks or clearance == 0.0:
+    if "peg_tip" not in f.landmarks or (clearance == 0.0 and short == 0.0):
         return T_base_fixture
     a = np.asarray(f.landmarks["approach"], float)
     n = np.array([0.0, 0.0, 1.0]) - a[2] * a
     moved = np.array(T_base_fixture, float)
-    moved[:3, 3] += T_base_fixture[:3, :3] @ (clearance * n / np.linalg.norm(n))
+    moved[:3, 3] += T_base_fixture[:3, :3] @ (clearance * n / np.linalg.norm(n) + short * a)
     return moved
 
 

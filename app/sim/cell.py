@@ -35,7 +35,7 @@ class CellConfig(CellLayout):
 
 def add_fixtures(world: SimWorld, config: CellLayout) -> dict[str, int]:
     """Build the rack and the shelf in a world at their configured poses; {name: body}."""
-    return add_layout_fixtures(world.require(), config)
+    return add_layout_fixtures(world.require(), config, world.config.mesh_margin)
 
 
 class SimCell:

@@ -17,6 +17,9 @@ from hardware.interfaces import DeviceNotConnectedError
 from hardware.settings import check_ranges
 
 
+MESH_MARGIN = 0.0002  # m
+
+
 @dataclass(frozen=True)
 class SimWorldConfig:
     """Physics settings of the simulated cell."""
@@ -26,10 +29,13 @@ class SimWorldConfig:
     solver_iterations: int = 80
     gravity: float = -9.81
     realtime: bool = False  # pace the physics to the wall clock (a served cell, where motions take their real time)
+    # m Bullet grows every convex hull of a mesh body by (objects, fixtures). Its default, 1 mm on each
+    # side of a contact, closed a mug's handle hole around the rack's peg to 0-0.6 mm (docs/cell.md)
+    mesh_margin: float = MESH_MARGIN
 
     def __post_init__(self) -> None:
         check_ranges(self, (("time_step", 0.0, 0.05, "s", False), ("solver_iterations", 1, 10_000, "iterations", True),
-                            ("gravity", -50.0, 0.0, "m/s^2", True)))
+                            ("gravity", -50.0, 0.0, "m/s^2", True), ("mesh_margin", 0.0, 0.01, "m", True)))
 
 
 class SimWorld:
@@ -111,8 +117,10 @@ class SimWorld:
 
     def add_mesh(self, visual_obj: Path, collision_obj: Path, T_world_body: np.ndarray, mass: float = 0.0,
                  scale: float = 1.0, rgba=(0.6, 0.7, 0.9, 1), friction: float = 0.8) -> int:
-        """A body from a visual OBJ and a collision OBJ (one convex hull per `o` block)."""
-        return bullet.add_mesh(self.require(), visual_obj, collision_obj, T_world_body, mass, scale, rgba, friction)
+        """A body from a visual OBJ and a collision OBJ (one convex hull per `o` block, grown by the
+        configured `mesh_margin`)."""
+        return bullet.add_mesh(self.require(), visual_obj, collision_obj, T_world_body, mass, scale, rgba, friction,
+                               self.config.mesh_margin)
 
     def remove(self, body: int) -> None:
         """Remove a body."""
