@@ -9,7 +9,7 @@ import numpy as np
 
 from app.jobs.record import JobHooks, JobResult, stage
 from app.jobs.settings import JobConfig, is_hang
-from app.motion.place_line import fixture_approach, peg_line_direction
+from app.motion.place_line import above_peg, fixture_approach, peg_line_direction
 from app.motion.scene import PlanningScene
 from app.predict.candidates import Candidate
 from app.predict.hole_places import DemoHang, demo_hang
@@ -55,6 +55,13 @@ class JobContext:
         """Where the task's demos hung the handle hole and how they carried (`app.predict.hole_places`),
         read and computed once per job."""
         return demo_hang(task_demos(self.config.demos or DEMOS_DIR / self.t.demos))
+
+    @cached_property
+    def T_base_fixture_placed(self) -> np.ndarray:
+        """The fixture's pose that places are planned for: moved clear of a peg by the executor's
+        `peg_clearance` and `peg_short` (`app.motion.place_line.above_peg`); other fixtures as they are."""
+        e = self.config.executor
+        return above_peg(self.T_base_fixture, self.t.fixture, e.peg_clearance, e.peg_short)
 
     def looks_for_hole(self) -> bool:
         """Whether the job tries places built from the handle hole: a hang by a method that is not the

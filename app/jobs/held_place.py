@@ -12,7 +12,6 @@ from app.jobs.record import GraspMissed, JobFailed, ur
 from app.jobs.second_look import second_look
 from app.motion.executor import OBJECT, FingerWidths, Planner
 from app.motion.ik import NoIKSolution
-from app.motion.place_line import above_peg
 from app.perception import resample
 from app.predict.candidates import Candidate
 from app.predict.hole_places import with_hole_pairs
@@ -26,8 +25,7 @@ def look_and_place(job: JobContext, planner: Planner, plan, chosen: Candidate, o
     should end (`sent`)."""
     T_grasp, width = plan.T_base_grasp, job.gripper.width
     widths = FingerWidths(width, width, width + job.config.release_clearance)
-    T_above = above_peg(job.T_base_fixture, job.t.fixture, job.config.executor.peg_clearance,
-                        job.config.executor.peg_short)
+    T_above = job.T_base_fixture_placed
     first = [chosen, *(c for c in options if c.grasp_rank == chosen.grasp_rank and c.place_rank != chosen.place_rank)]
     with job.stage("look"):
         holes = [(c, cloud, False) for c in first if c.place_rank < 0]  # the first look's hole places, first
@@ -65,14 +63,10 @@ def look_and_place(job: JobContext, planner: Planner, plan, chosen: Candidate, o
                 continue
             if looked:
                 look.update({"used": True, "place_rank": c.place_rank, **moved(plan, rest)})
-            elif views is not None:  # why the look's best place was not taken
-                look["why"] = look_whys[0] if look_whys else "no place"
-            job.result.look = look
+            job.result.look = _with_why(look, views is not None, look_whys)
             job.result.poses["place"] = ur(rest.T_base_place)
             return rest, transform_points(c.motion, seen)
-        if views is not None:
-            look["why"] = look_whys[0] if look_whys else "no place"
-        job.result.look = look
+        job.result.look = _with_why(look, views is not None, look_whys)
         raise JobFailed(f"none of {len(tries)} places could be planned for the held grasp; the best: "
                         f"{whys[0] if whys else 'no place'}")
 
@@ -89,6 +83,14 @@ def held_hole(job: JobContext, chosen: Candidate, clouds: list[np.ndarray]
         if found["found"]:
             return [c for c in pairs if c.place_rank < 0], {**found, "view": i}, points
     return [], found, None
+
+
+def _with_why(look: dict, looked: bool, look_whys: list[str]) -> dict:
+    """The look's record, saying why its best place was not taken when it looked and none of its
+    places was (the first of `look_whys`, the reasons its places failed)."""
+    if looked and not look["used"]:
+        look["why"] = look_whys[0] if look_whys else "no place"
+    return look
 
 
 def moved(plan, rest) -> dict:

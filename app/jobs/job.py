@@ -34,7 +34,6 @@ from app.jobs.record import STAGES, GraspMissed, JobFailed, JobHooks, JobResult,
 from app.jobs.settings import JOB_IMITATION, JobConfig, looks_again
 from app.motion.executor import OBJECT, FingerWidths, Planner, execute, reverse
 from app.motion.ik import reach_failure
-from app.motion.place_line import above_peg
 from app.motion.scene import PlanningScene
 from app.nift.imitate import use_threads
 from app.perception import object_points, resample
@@ -152,8 +151,7 @@ def _plan(job: JobContext, planner: Planner, options: list, cloud: np.ndarray):
         held, c, stroke = held_width(T_grasp, cloud), job.config, job.gripper.stroke
         return FingerWidths(min(stroke, held + c.approach_clearance), held, min(stroke, held + c.release_clearance))
 
-    T_above = above_peg(job.T_base_fixture, job.t.fixture, job.config.executor.peg_clearance,
-                        job.config.executor.peg_short)
+    T_above = job.T_base_fixture_placed
     if T_above is not job.T_base_fixture:  # a peg: placed clear of it; other fixtures' pairs stay bit for bit
         options = [replace(c, T_base_fixture=T_above) for c in options]
     with job.stage("plan"):

@@ -83,7 +83,6 @@ def stage(result: JobResult, name: str, hooks: JobHooks):
     hooks.keyframe(name)
 
 
-
 def ur(T: np.ndarray) -> list[float]:
     """A pose as the record keeps it: UR's [x y z rx ry rz], rounded."""
     return np.round(pose_to_ur(T), 5).tolist()
