@@ -29,7 +29,7 @@ import numpy as np
 from scipy.spatial import ConvexHull, QhullError
 
 from app.layout import CellLayout, add_fixtures
-from hardware.bullet import add_table, joint_and_link_indices, load_cell_robot, p, set_pose
+from hardware.bullet import add_table, connect, joint_and_link_indices, load_cell_robot, p, set_pose
 from hardware.gripper_geometry import FINGER_JOINTS, GripperGeometry, standalone_gripper_urdf
 from hardware.kinematics import JOINT_NAMES, UR5Kinematics
 from hardware.robot_description import HOME_Q, write_cached
@@ -63,8 +63,7 @@ class PlanningScene:
         self.geometry = geometry
         self.finger_width = geometry.stroke  # m between the fingers' inner faces (`fingers`)
         self.kinematics = UR5Kinematics(tcp_offset=geometry.T_tool0_tcp)
-        self.client: int | None = p.connect(p.DIRECT)
-        p.setPhysicsEngineParameter(deterministicOverlappingPairs=1, physicsClientId=self.client)
+        self.client: int | None = connect()
         self.robot = load_cell_robot(self.client, geometry, np.linalg.inv(self.kinematics.T_world_base))
         joints, links = joint_and_link_indices(self.robot, self.client)
         self.arm_joints = [joints[name] for name in JOINT_NAMES]

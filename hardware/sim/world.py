@@ -63,11 +63,10 @@ class SimWorld:
         """Start the physics server (DIRECT, or GUI with config.gui) and build table and floor."""
         if self.client is not None:
             return
-        self.client = p.connect(p.GUI if self.config.gui else p.DIRECT)
+        self.client = bullet.connect(self.config.gui)
         p.setGravity(0, 0, self.config.gravity, physicsClientId=self.client)
         p.setPhysicsEngineParameter(fixedTimeStep=self.config.time_step,
-                                    numSolverIterations=self.config.solver_iterations,
-                                    deterministicOverlappingPairs=1, physicsClientId=self.client)
+                                    numSolverIterations=self.config.solver_iterations, physicsClientId=self.client)
         self.table = bullet.add_table(self.client)
         self.floor = self.add_box((6.0, 6.0, 0.1), (0.0, 0.0, -TABLE_HEIGHT - 0.05), rgba=(0.5, 0.5, 0.5, 1))
         self.steps = 0
