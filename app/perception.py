@@ -1,4 +1,4 @@
-"""One RGB-D frame -> the object's point cloud in the robot base frame (Open3D throughout).
+"""One RGB-D frame -> the object's point cloud in the robot base frame (Open3D for the geometry).
 
 Steps: back-project the valid depth pixels with the intrinsics and the (calibrated) camera pose,
 crop to the workspace box, remove the table plane (RANSAC), keep the largest DBSCAN cluster,
@@ -13,6 +13,9 @@ import open3d as o3d
 
 from hardware.gripper_geometry import GripperGeometry
 from hardware.interfaces import Frame
+
+
+DEPTH_MAX = 10.0  # m: farther depth pixels are dropped
 
 
 @dataclass(frozen=True)
@@ -33,7 +36,9 @@ class PerceptionConfig:
 
 
 def back_project(frame: Frame, T_base_cam: np.ndarray) -> np.ndarray:
-    """Valid depth pixels as points in the base frame: (M, 3)."""
+    """Valid depth pixels as points in the base frame, in the image's row-major order: (M, 3).
+
+    A pixel (u, v) of depth z is the camera-frame point ((u - cx) z / fx, (v - cy) z / fy, z)."""
     depth = np.asarray(frame.depth)
     K = frame.intrinsics
     if depth.shape != (K.height, K.width):
@@ -42,11 +47,13 @@ def back_project(frame: Frame, T_base_cam: np.ndarray) -> np.ndarray:
         raise ValueError("depth image contains NaN (a driver should report invalid depth as 0)")
     if not (depth > 0).any():
         raise ValueError("depth image has no valid pixel (all 0)")
-    image = o3d.t.geometry.Image(o3d.core.Tensor(np.ascontiguousarray(depth, dtype=np.float32)))
-    cloud = o3d.t.geometry.PointCloud.create_from_depth_image(
-        image, o3d.core.Tensor(K.matrix), o3d.core.Tensor(np.linalg.inv(T_base_cam)),
-        depth_scale=1.0, depth_max=10.0)
-    return cloud.point.positions.numpy().astype(np.float64)
+    # numpy, not Open3D's create_from_depth_image: that one returns the same points in a thread-timing
+    # order, and farthest point sampling, RANSAC and DBSCAN downstream follow the order - a seed's job
+    # was not the same twice in a process (docs/decisions.md, "Back-projection in pixel order")
+    rows, cols = np.nonzero((depth > 0) & (depth <= DEPTH_MAX))  # row-major: the image's own order
+    z = depth[rows, cols].astype(np.float64)
+    cam = np.stack([(cols - K.cx) * z / K.fx, (rows - K.cy) * z / K.fy, z], axis=1)  # (M, 3) camera frame
+    return cam @ T_base_cam[:3, :3].T + T_base_cam[:3, 3]
 
 
 def crop(points: np.ndarray, cfg: PerceptionConfig) -> np.ndarray:

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from app.objects import generate, rack, semantics, shelf
-from app.perception import object_cloud
+from app.perception import back_project, object_cloud, object_points
 from app.sim.cell import SimCell
 from app.sim.hang_gap import bullet_gap, mesh_gap
 from app.sim.judges import judge_grasp, judge_place
@@ -54,6 +54,33 @@ def test_perception_names_bad_frames(cell):
         object_cloud(zero, cell.camera.T_base_cam)
     with pytest.raises(ValueError, match="depth image is"):
         object_cloud(dataclasses.replace(frame, depth=frame.depth[:10]), cell.camera.T_base_cam)
+
+
+def test_back_projection_is_open3ds_in_the_image_order_and_perception_repeats_itself(cell):
+    """The same frame gives the same points in the same order (Open3D's own back-projection does not)."""
+    import open3d as o3d
+    from scipy.spatial import cKDTree
+
+    box = cell.world.add_box(BOX, BOX_CENTRE, mass=0.2)
+    cell.world.step(30)
+    try:
+        frame = cell.camera.capture()
+    finally:
+        cell.world.remove(box)
+    T = cell.camera.T_base_cam
+    ours = back_project(frame, T)
+    K = frame.intrinsics
+    theirs = o3d.t.geometry.PointCloud.create_from_depth_image(
+        o3d.t.geometry.Image(o3d.core.Tensor(frame.depth)), o3d.core.Tensor(K.matrix),
+        o3d.core.Tensor(np.linalg.inv(T)), depth_scale=1.0, depth_max=10.0).point.positions.numpy()
+    assert ours.shape == theirs.shape
+    assert cKDTree(theirs).query(ours)[0].max() < 1e-5 and cKDTree(ours).query(theirs)[0].max() < 1e-5  # the same set
+    rows, cols = np.nonzero(frame.depth > 0)
+    cam = (ours - T[:3, 3]) @ T[:3, :3]  # back to the camera frame: pixel k projects onto (cols[k], rows[k])
+    assert np.allclose(cam[:, 0] / cam[:, 2] * K.fx + K.cx, cols, atol=1e-6)
+    assert np.allclose(cam[:, 1] / cam[:, 2] * K.fy + K.cy, rows, atol=1e-6)
+    firsts = [object_points(frame, T) for _ in range(5)]
+    assert all(np.array_equal(firsts[0], f) for f in firsts)
 
 
 def test_noise_grows_with_distance():
