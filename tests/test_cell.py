@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from app.objects import generate, rack, semantics, shelf
-from app.perception import back_project, object_cloud, object_points
+from app.perception import DEPTH_MAX, back_project, object_cloud, object_points
 from app.sim.cell import SimCell
 from app.sim.hang_gap import bullet_gap, mesh_gap
 from app.sim.judges import judge_grasp, judge_place
@@ -72,7 +72,7 @@ def test_back_projection_is_open3ds_in_the_image_order_and_perception_repeats_it
     K = frame.intrinsics
     theirs = o3d.t.geometry.PointCloud.create_from_depth_image(
         o3d.t.geometry.Image(o3d.core.Tensor(frame.depth)), o3d.core.Tensor(K.matrix),
-        o3d.core.Tensor(np.linalg.inv(T)), depth_scale=1.0, depth_max=10.0).point.positions.numpy()
+        o3d.core.Tensor(np.linalg.inv(T)), depth_scale=1.0, depth_max=DEPTH_MAX).point.positions.numpy()
     assert ours.shape == theirs.shape
     assert cKDTree(theirs).query(ours)[0].max() < 1e-5 and cKDTree(ours).query(theirs)[0].max() < 1e-5  # the same set
     rows, cols = np.nonzero(frame.depth > 0)
