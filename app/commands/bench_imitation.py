@@ -23,10 +23,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from app.bench.imitation import run_imitation_benchmark
     from app.console.options import imitation_config
 
     tasks = tuple(t.strip() for t in args.tasks.split(",") if t.strip())
-    figures = run_imitation_benchmark(args.quick, args.seed, args.method, args.objects, tasks, imitation_config(args))
+    config = imitation_config(args)  # bad options fail here, before the benchmark's imports (torch: seconds)
+
+    from app.bench.imitation import run_imitation_benchmark
+
+    figures = run_imitation_benchmark(args.quick, args.seed, args.method, args.objects, tasks, config)
     print_figures(figures, args.json, {f"{t}_seconds_per_template": "<= 2" for t in tasks})
     return 0

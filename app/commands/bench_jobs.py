@@ -30,9 +30,6 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from tqdm import tqdm
-
-    from app.bench.jobs import run_jobs_benchmark
     from app.console.options import cell_config
     from app.io_utils import writable_file
     from app.tasks.task import task
@@ -44,6 +41,11 @@ def run(args: argparse.Namespace) -> int:
     cell_cfg = cell_config(args)  # a bad --config fails before the progress bar
     if args.records is not None:
         writable_file(args.records, "--records")
+
+    from tqdm import tqdm
+
+    from app.bench.jobs import run_jobs_benchmark
+
     with tqdm(total=jobs * len(tasks), unit="job", desc="bench-jobs") as bar:
         figures = run_jobs_benchmark(jobs, args.method, args.pose, args.seed, tasks, cell_cfg, args.calibration,
                                      lambda r: bar.update(1), args.records, args.second_look)

@@ -24,8 +24,6 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from app.bench.net import run_net_benchmark
-
     if args.quick:
         args.reads, args.frames, args.jobs = 200, 5, 1
     for name in ("reads", "frames"):
@@ -33,6 +31,9 @@ def run(args: argparse.Namespace) -> int:
             raise ValueError(f"--{name} must be at least 1")
     if args.jobs < 0:
         raise ValueError("--jobs must be at least 0")
+
+    from app.bench.net import run_net_benchmark
+
     print_figures(run_net_benchmark(args.reads, args.frames, args.jobs, args.task, args.method, args.seed,
                                     args.calibration), args.json)
     return 0

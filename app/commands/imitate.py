@@ -35,12 +35,15 @@ def run(args: argparse.Namespace) -> int:
 
     from app.cloud_io import check_cloud, load_cloud
     from app.console.options import imitation_config
+
+    cloud = check_cloud(load_cloud(args.cloud), str(args.cloud))
+    config = imitation_config(args)  # bad input fails here, before the method's imports (torch: seconds)
+
     from app.predict.predict import predict
     from app.tasks.task import task
     from hardware.se3 import pose_to_ur
 
-    cloud = check_cloud(load_cloud(args.cloud), str(args.cloud))
-    pred = predict(task(args.task), cloud, args.method, directory=args.demos, config=imitation_config(args),
+    pred = predict(task(args.task), cloud, args.method, directory=args.demos, config=config,
                    center=args.center_grasp, feasible=args.feasible, align=args.align_grasp)
     if args.json:
         print(json.dumps(pred.record(), indent=2))

@@ -6,7 +6,7 @@ import json
 from pathlib import Path
 
 from app.categories import POSES
-from app.console.options import add_config_argument, add_second_look_argument
+from app.console.options import add_config_argument, add_second_look_argument, cell_config
 
 NAME = "run"
 HELP = "run pick-and-place jobs in the sim cell: capture, imitate, plan, grasp, carry, place, verify"
@@ -40,13 +40,18 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from app.jobs.job import JobConfig
-    from app.tasks.task import task
-
     if args.jobs < 1:
         raise ValueError(f"--jobs must be at least 1, got {args.jobs}")
     if args.record is not None and args.record.suffix.lower() != ".png":
         raise ValueError(f"--record {args.record}: key frames are written as a PNG strip; give a .png path")
+    if args.devices == "net" and (args.record is not None or args.gui):
+        raise ValueError("--record and --gui need the simulated cell in this process (--devices sim)")
+    if args.devices == "sim":
+        cell_config(args)  # a bad --config fails here, in a second, not after the job path's imports
+
+    from app.jobs.job import JobConfig
+    from app.tasks.task import task
+
     t = task(args.task)
     source = imported(args.object, t, args.method) if args.object else None
     if source is not None and args.devices == "net":
@@ -72,7 +77,6 @@ def _run_sim(args: argparse.Namespace, t, config, source=None) -> list:
     """The jobs in the simulated cell in this process (on the imported object `source`, if given)."""
     from tqdm import tqdm
 
-    from app.console.options import cell_config
     from app.motion.scene import PlanningScene
     from app.sim.calibration import ensure_calibration
     from app.sim.cell import SimCell
@@ -109,8 +113,6 @@ def _run_net(args: argparse.Namespace, t, config) -> list:
     from app.layout import CellLayout
     from hardware.net.client import NetDeviceConfig
 
-    if args.record is not None or args.gui:
-        raise ValueError("--record and --gui need the simulated cell in this process (--devices sim)")
     layout = load_toml(CellLayout, args.config, only_known=True) if args.config else CellLayout()
     device = NetDeviceConfig() if args.token_file is None else NetDeviceConfig(token_file=args.token_file)
     net = NetCellConfig(device, device, device, replace(device, motion_timeout=600.0))

@@ -57,18 +57,20 @@ def run(args: argparse.Namespace) -> int:
     from dataclasses import replace
 
     from app.console.options import cell_config
-    from app.sim.cell import SimCell
-    from app.sim.rig import SimRig, rig_service
-    from hardware.net.discovery import Advertiser
     from hardware.net.server import DeviceServer, ServerConfig, check_settings
-    from hardware.net.token import DEFAULT_TOKEN_FILE, ensure_token
-    from hardware.net.verbs import device_service
 
     names = _devices(args.devices)
     check_bind(args.bind, args.token_file)
     config = cell_config(args)
     config = replace(config, world=replace(config.world, realtime=args.realtime))
-    check_settings(args.port, args.watchdog)  # before the token file is written
+    check_settings(args.port, args.watchdog)  # before the token file is written and the simulator is imported
+
+    from app.sim.cell import SimCell
+    from app.sim.rig import SimRig, rig_service
+    from hardware.net.discovery import Advertiser
+    from hardware.net.token import DEFAULT_TOKEN_FILE, ensure_token
+    from hardware.net.verbs import device_service
+
     token_file = args.token_file or DEFAULT_TOKEN_FILE
     token = ensure_token(token_file)  # written on the first start only
     logging.basicConfig(level=logging.INFO, format="%(asctime)s nift serve: %(message)s", stream=sys.stderr)

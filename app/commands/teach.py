@@ -67,10 +67,6 @@ def web(args: argparse.Namespace, t, out: Path) -> int:
 
     from app.io_utils import writable_directory
     from app.objects.library import load_object
-    from app.sim.calibration import ensure_calibration
-    from app.sim.cell import SimCell
-    from app.teach.page import TeachPage
-    from app.teach.session import TeachSession
 
     if not args.web:
         raise ValueError("--object teaches by hand: add --web (the scripted teacher needs procedural objects)")
@@ -80,6 +76,12 @@ def web(args: argparse.Namespace, t, out: Path) -> int:
         raise ValueError(f"--port must be 1-65535, got {args.port}")
     writable_directory(out, "--out")
     source = load_object(args.object, category=t.category) if args.object else None
+
+    from app.sim.calibration import ensure_calibration
+    from app.sim.cell import SimCell
+    from app.teach.page import TeachPage
+    from app.teach.session import TeachSession
+
     interrupted = threading.Event()
     signal.signal(signal.SIGINT, lambda *_: _interrupt(interrupted))
     with SimCell(cell_config(args)) as cell:
@@ -102,9 +104,7 @@ def web(args: argparse.Namespace, t, out: Path) -> int:
 def run(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from app.sim.cell import SimCell
-    from app.sim.teach import record_demo, record_task
-    from app.tasks.library import DEMOS_DIR, task_demos, task_templates
+    from app.tasks.demo import DEMOS_DIR
     from app.tasks.staging import demo_count, staged, teach_mode
     from app.tasks.task import task
 
@@ -112,14 +112,20 @@ def run(args: argparse.Namespace) -> int:
     out = args.out or DEMOS_DIR / t.name
     if args.web or args.object:
         return web(args, t, out)
+    if not args.rebuild:
+        # one demo from a poses file joins the others unless --replace says otherwise
+        mode = teach_mode(out, args.replace, args.add or (args.poses is not None and not args.replace))
+        poses = read_poses(args.poses) if args.poses else None
+
+    from app.sim.cell import SimCell  # bad input has failed by now, before the simulator's imports
+    from app.sim.teach import record_demo, record_task
+    from app.tasks.library import task_demos, task_templates
+
     log = (lambda line: print(line, file=sys.stderr)) if args.json else print
     recorded = []
     if args.rebuild:
         templates = task_templates(t, out, rebuild=True)
     else:
-        # one demo from a poses file joins the others unless --replace says otherwise
-        mode = teach_mode(out, args.replace, args.add or (args.poses is not None and not args.replace))
-        poses = read_poses(args.poses) if args.poses else None
         with SimCell(cell_config(args)) as cell, staged(out, mode) as stage:
             from app.sim.calibration import ensure_calibration
 

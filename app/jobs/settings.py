@@ -7,7 +7,7 @@ from pathlib import Path
 from app.jobs.second_look import SecondLookConfig
 from app.motion.executor import ExecutorConfig
 from app.nift.candidates import CandidateConfig
-from app.nift.imitate import ImitationConfig
+from app.nift.imitation_config import ImitationConfig
 from app.objects import fixture
 from app.perception import PerceptionConfig
 from app.predict.methods import TEMPLATE_METHODS

@@ -16,6 +16,7 @@ from app.io_utils import read_npz, write_npz
 from hardware.se3 import invert
 
 FORMAT = "nift-demo/1"
+DEMOS_DIR = Path(__file__).resolve().parents[2] / "demos"  # the shipped tasks' directories
 DEMO_GLOB = "demo-*.npz"  # a task directory's demo files
 POSES = ("T_base_obj", "T_base_tcp", "T_fixture_obj", "T_base_fixture", "T_base_cam")
 

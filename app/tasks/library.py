@@ -15,11 +15,10 @@ from app.io_utils import cache_root
 from app.nift.template import (StaleTemplate, Template, build_template, field_id, field_override, load_template,
                                save_template, with_demo_features)
 from app.tasks.anchors import anchor_mesh
-from app.tasks.demo import DEMO_GLOB, Demo, load_demo
+from app.tasks.demo import DEMO_GLOB, DEMOS_DIR, Demo, load_demo
 from app.tasks.task import Task
 from app.tasks.staging import leftovers
 
-DEMOS_DIR = Path(__file__).resolve().parents[2] / "demos"
 STAGES = ("grasp", "place")
 
 
