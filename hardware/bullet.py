@@ -11,6 +11,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+from scipy.spatial import ConvexHull, QhullError
 from scipy.spatial.transform import Rotation
 
 from hardware.gripper_geometry import GripperGeometry
@@ -60,6 +61,25 @@ def connect(gui: bool = False) -> int:
     client = p.connect(p.GUI if gui else p.DIRECT)
     p.setPhysicsEngineParameter(deterministicOverlappingPairs=1, enableFileCaching=0, physicsClientId=client)
     return client
+
+
+def convex_shape(client: int, points: np.ndarray, path: Path) -> int:
+    """A convex collision shape: the hull of the points (N, 3), written to the OBJ `path` and loaded.
+
+    PyBullet's `createCollisionShape(vertices=...)` never frees the Python list it is given (about
+    5 KB a 50-vertex hull, for the life of the process, whatever is removed or disconnected); a file
+    is read and let go. Keep the file while a body uses the shape: a DIRECT client's renderer reads
+    it again when a body is made from it."""
+    points = np.asarray(points, float)
+    try:
+        hull = ConvexHull(points)
+    except QhullError:  # a flat set: joggled into a thin solid, as Bullet's own hull of it would be
+        hull = ConvexHull(points, qhull_options="QJ")
+    number = np.zeros(len(points), int)
+    number[hull.vertices] = np.arange(1, len(hull.vertices) + 1)  # OBJ counts from 1
+    path.write_text("".join(f"v {x:.9g} {y:.9g} {z:.9g}\n" for x, y, z in points[hull.vertices]) +
+                    "".join(f"f {a} {b} {c}\n" for a, b, c in number[hull.simplices]))
+    return p.createCollisionShape(p.GEOM_MESH, fileName=str(path), physicsClientId=client)
 
 
 def pose_to_pybullet(T: np.ndarray) -> tuple[list[float], list[float]]:

@@ -22,14 +22,15 @@ on a held object, whose open fingers would reach 4 cm to each side into a rack's
 from __future__ import annotations
 
 import itertools
+import tempfile
 from collections.abc import Iterator
 from contextlib import contextmanager
+from pathlib import Path
 
 import numpy as np
-from scipy.spatial import ConvexHull, QhullError
 
 from app.layout import CellLayout, add_fixtures
-from hardware.bullet import add_table, connect, joint_and_link_indices, load_cell_robot, p, set_pose
+from hardware.bullet import add_table, connect, convex_shape, joint_and_link_indices, load_cell_robot, p, set_pose
 from hardware.gripper_geometry import FINGER_JOINTS, GripperGeometry, standalone_gripper_urdf
 from hardware.kinematics import JOINT_NAMES, UR5Kinematics
 from hardware.robot_description import HOME_Q, write_cached
@@ -43,16 +44,6 @@ ON_TABLE = ("base_link", "shoulder_link")  # bolted to the table: never checked 
 CLOSE_BY_DESIGN = {("base_link", "upper_arm_link")}
 
 
-def hull_vertices(points: np.ndarray) -> np.ndarray:
-    """The vertices of the points' convex hull (all of them for a flat set): PyBullet makes the same
-    convex shape from them, and keeps every vertex list it is given (a 2,048-point cloud was 0.6 MB
-    a call, never freed; `nift bench-jobs` memory figures, docs/limits.md)."""
-    try:
-        return points[ConvexHull(points).vertices]
-    except (QhullError, ValueError):
-        return points
-
-
 class PlanningScene:
     """Collision queries for joint configurations of the cell's UR5."""
 
@@ -64,6 +55,8 @@ class PlanningScene:
         self.finger_width = geometry.stroke  # m between the fingers' inner faces (`fingers`)
         self.kinematics = UR5Kinematics(tcp_offset=geometry.T_tool0_tcp)
         self.client: int | None = connect()
+        self._shape_files = tempfile.TemporaryDirectory(prefix="nift-scene-")  # cloud obstacles' hulls (OBJ)
+        self._shape_dir = Path(self._shape_files.name)
         self.robot = load_cell_robot(self.client, geometry, np.linalg.inv(self.kinematics.T_world_base))
         joints, links = joint_and_link_indices(self.robot, self.client)
         self.arm_joints = [joints[name] for name in JOINT_NAMES]
@@ -72,6 +65,7 @@ class PlanningScene:
         self.links = {name: links[name] for name in ("base_link", *ARM_LINKS, *GRIPPER_LINKS)}
         self.self_pairs = self._self_pairs()
         self.solids: dict[str, np.ndarray] = {}  # cloud obstacles' points (with their shadow, no footprint)
+        self._shapes: dict[str, int] = {}  # the collision shape of each cloud obstacle
         self._held_shapes: dict[str, int] = {}  # the collision shape of each cloud obstacle when carried
         self.held: tuple[int, np.ndarray] | None = None  # (body, T_tcp_body) while holding
         self.ghost = self._load_ghost_gripper()
@@ -81,10 +75,11 @@ class PlanningScene:
         if self.client is not None:
             p.disconnect(self.client)
             self.client = None
+            self._shape_files.cleanup()
 
     def rebuild(self) -> None:
         """The same scene in a fresh client, without run-time obstacles: PyBullet never frees a mesh
-        shape (0.7 MB a job's object hull), only a whole client (a series of jobs rebuilds now and then)."""
+        shape (a job's object hull), only a whole client (a series of jobs rebuilds now and then)."""
         self.close()
         self.__init__(*self._args)
 
@@ -125,18 +120,19 @@ class PlanningScene:
         solid = np.concatenate(parts)
         self.solids[name] = solid
         footprint = solid * [1.0, 1.0, 0.0]
-        shape = p.createCollisionShape(p.GEOM_MESH, vertices=hull_vertices(np.concatenate([solid, footprint])).tolist(),
-                                       physicsClientId=self.client)
-        self.obstacles[name] = p.createMultiBody(0.0, shape, physicsClientId=self.client)
-        self._held_shapes.pop(name, None)
+        self._shapes[name] = convex_shape(self.client, np.concatenate([solid, footprint]), self._shape_dir / f"{name}.obj")
+        self.obstacles[name] = p.createMultiBody(0.0, self._shapes[name], physicsClientId=self.client)
 
     def remove(self, name: str) -> None:
-        """Drop a run-time obstacle (no-op if absent)."""
+        """Drop a run-time obstacle (no-op if absent) and its hulls' files (Bullet keeps the shapes
+        until `rebuild`: its removeCollisionShape frees nothing)."""
         body = self.obstacles.pop(name, None)
         self.solids.pop(name, None)
-        self._held_shapes.pop(name, None)
         if body is not None:
             p.removeBody(body, physicsClientId=self.client)
+        for shapes, suffix in ((self._shapes, ""), (self._held_shapes, "-held")):
+            if shapes.pop(name, None) is not None:
+                (self._shape_dir / f"{name}{suffix}.obj").unlink(missing_ok=True)
 
     def _load_ghost_gripper(self) -> int:
         """A free copy of the gripper, fingers open, parked far away: `gripper_collisions` moves it."""
@@ -167,8 +163,7 @@ class PlanningScene:
             yield self
             return
         if name not in self._held_shapes:  # one shape per cloud, however often it is carried in planning
-            self._held_shapes[name] = p.createCollisionShape(p.GEOM_MESH, vertices=hull_vertices(self.solids[name]).tolist(),
-                                                             physicsClientId=self.client)
+            self._held_shapes[name] = convex_shape(self.client, self.solids[name], self._shape_dir / f"{name}-held.obj")
         body = p.createMultiBody(0.0, self._held_shapes[name], physicsClientId=self.client)
         self.held = (body, np.linalg.inv(T_base_tcp))  # the body's frame is the base frame at the grasp
         try:
