@@ -55,11 +55,14 @@ class GripperGeometry:
         return np.array(out)
 
 
-    def contains(self, points_tcp: np.ndarray, width: float | None = None, margin: float = 0.0) -> np.ndarray:
+    def contains(self, points_tcp: np.ndarray, width: float | None = None, margin: float = 0.0,
+                 sweep: float = 0.0) -> np.ndarray:
         """(N,) bool: which points (N, 3), in the TCP frame, lie inside the palm's or a finger's box
-        (`corners`, fingers `width` apart) grown by `margin` on every side."""
+        (`corners`, fingers `width` apart) grown by `margin` on every side, or inside the volume each
+        box sweeps coming in along the tool axis from `sweep` metres back (z - sweep to z)."""
         boxes = self.corners(width).reshape(3, 8, 3)  # palm, finger, finger
         lo, hi = boxes.min(axis=1) - margin, boxes.max(axis=1) + margin  # (3, 3)
+        lo[:, 2] -= sweep
         p = np.asarray(points_tcp, float)[:, None]  # (N, 1, 3)
         return ((p >= lo) & (p <= hi)).all(axis=-1).any(axis=-1)
 

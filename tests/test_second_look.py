@@ -57,6 +57,17 @@ def test_the_gripper_contains_points_in_its_palm_and_fingers_only():
     assert g.contains(np.array([[0.0, 0.0, z_finger + g.finger[2]]]), margin=0.0).sum() == 0
 
 
+def test_the_swept_gripper_is_the_union_of_the_gripper_along_its_approach():
+    """contains(..., sweep=d) is the box test at every shift s in [0, d] along the tool axis (here on
+    a 1 mm grid, which the boxes, 60 mm tall, cannot fall between), on random points near the gripper."""
+    g = GripperGeometry()
+    points = np.random.default_rng(3).uniform([-0.05, -0.09, -0.2], [0.05, 0.09, 0.05], (4000, 3))
+    stepped = np.any([g.contains(points + [0.0, 0.0, s], None, 0.002) for s in np.arange(0.0, 0.1 + 1e-9, 0.001)], axis=0)
+    swept = g.contains(points, None, 0.002, sweep=0.1)
+    assert stepped.sum() > 500 and (swept == stepped).mean() > 0.999
+    assert (g.contains(points, None, 0.002) <= swept).all()  # the gripper at the end of the line is inside its sweep
+
+
 def test_the_wrist_turns_within_its_limits_and_views_map_back_to_the_grasp():
     limits = JointLimits(np.full(6, -2 * np.pi), np.full(6, 2 * np.pi), np.ones(6), np.ones(6), np.ones(6))
     q = np.array([0.0, -1.0, 1.0, -1.0, -1.5, 5.0])

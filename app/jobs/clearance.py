@@ -32,13 +32,10 @@ def gripper_clear(scene: PlanningScene, cloud: np.ndarray, table_z: float = 0.0,
 
 
 def approach_clear(T_base_tcp: np.ndarray, cloud: np.ndarray, distance: float, geometry: GripperGeometry,
-                   margin: float = 0.002, step: float = 0.005) -> bool:
-    """Whether no cloud point (N, 3) lies in the open gripper's palm or fingers (grown by `margin`) at
-    any pose of the approach line, from `distance` back along the tool axis to T_base_tcp: the
-    planning scene lets the approach pass the object's hull (it must, to close on it), so a finger
+                   margin: float = 0.002) -> bool:
+    """Whether no cloud point (N, 3) lies in the volume the open gripper's palm and fingers (grown by
+    `margin`) sweep along the approach line, from `distance` back along the tool axis to T_base_tcp:
+    the planning scene lets the approach pass the object's hull (it must, to close on it), so a finger
     coming down on the rim instead of beside it is caught here (it stopped the arm on the line)."""
     local = (np.asarray(cloud, float) - T_base_tcp[:3, 3]) @ T_base_tcp[:3, :3]  # (N, 3) TCP frame
-    for s in np.arange(0.0, distance + 1e-9, step):  # the gripper s back: points sit s further along z
-        if geometry.contains(local + [0.0, 0.0, s], None, margin).any():
-            return False
-    return True
+    return not geometry.contains(local, None, margin, sweep=distance).any()
