@@ -9,8 +9,8 @@ object came to rest, taking key-frame pictures) comes in through `JobHooks`.
 Our additions, as a person at the cell would work:
 - the plan takes the first grasp and place pair, in the order of the template loss, that the cell
   can execute (`app.jobs.choice`), not the single lowest-loss pose;
-- the hold is checked after closing and after the lift (the gripper's width and object_detected);
-  on a miss the gripper opens, backs off along the approach, the arm goes home, the camera looks
+- the hold is checked after closing, after the lift and after the carry (the gripper's width and
+  object_detected); on a miss the gripper opens, backs off along the approach, the arm goes home, the camera looks
   again and the next candidate with another grasp is tried (re-imitated when the object moved),
   up to `JobConfig.attempts` grasps. Every attempt goes in the record;
 - after the release the camera checks that something new stands where the object was sent
@@ -45,12 +45,15 @@ from app.predict.table_clearance import backed_off_table
 from app.tasks.task import Task
 from hardware.interfaces import Arm, DepthCamera, Gripper
 from hardware.kinematics import UR5Kinematics
-from hardware.se3 import transform_points, ur_to_pose
+from hardware.se3 import pose_to_ur, transform_points, ur_to_pose
 
 __all__ = ["JOB_IMITATION", "STAGES", "GraspMissed", "JobConfig", "JobFailed", "JobHooks", "JobResult", "Predictor",
            "run_job"]
 MOVED = 0.01  # m: a cloud whose centroid moved more than this since the last look is imitated again
 RELEASE_TOLERANCE = 0.005  # m: fingers that stop farther than this short of the opening asked did not let go
+RELEASE_BACK_OFF = 0.002  # m back along the approach per try when the fingers jam on the release
+RELEASE_TRIES = 3
+RELEASE_SPEED, RELEASE_ACCELERATION = 0.02, 0.5  # m/s, m/s^2 of those few millimetres
 
 
 def run_job(t: Task, arm: Arm, gripper: Gripper, camera: DepthCamera, T_base_cam: np.ndarray,
@@ -103,6 +106,7 @@ def _run(job: JobContext) -> None:
             _pick(job, plan)
             if job.placer is not None:
                 plan, sent = look_and_place(job, planner, plan, chosen, options, cloud)
+            _carry(job, plan)
         except GraspMissed as miss:
             job.result.attempts.append({"attempt": attempt, **describe(chosen, str(miss))})
             if attempt == job.config.attempts:
@@ -190,6 +194,15 @@ def _pick(job: JobContext, plan) -> None:
             raise GraspMissed(f"object dropped during the lift (gripper width {1000 * job.gripper.width:.1f} mm)")
 
 
+def _carry(job: JobContext, plan) -> None:
+    """Carry to the pre-place; GraspMissed when the object slipped out on the way (it lies somewhere
+    in the cell now: the next attempt looks for it again)."""
+    with job.stage("carry"):
+        execute(job.arm, plan.segment("carry"), job.config.executor.end_tolerance)
+        if not job.gripper.object_detected:
+            raise GraspMissed(f"object dropped during the carry (gripper width {1000 * job.gripper.width:.1f} mm)")
+
+
 def _recover(job: JobContext, planner: Planner, plan) -> None:
     """After a miss: open, back off along the approach (when still at the grasp), go home."""
     tolerance = job.config.executor.end_tolerance
@@ -204,20 +217,12 @@ def _recover(job: JobContext, planner: Planner, plan) -> None:
 
 
 def _place(job: JobContext, plan, sent: np.ndarray) -> None:
-    """Carry, place, release, retreat, verify (`sent`: the observed cloud moved where it should end)."""
+    """Place, release, retreat, verify (`sent`: the observed cloud moved where it should end)."""
     tolerance = job.config.executor.end_tolerance
-    with job.stage("carry"):
-        execute(job.arm, plan.segment("carry"), tolerance)
-        if not job.gripper.object_detected:
-            raise JobFailed(f"object dropped during the carry (gripper width {1000 * job.gripper.width:.1f} mm)")
     with job.stage("place"):
         execute(job.arm, plan.segment("place"), tolerance)
     with job.stage("release"):
-        asked = min(job.gripper.stroke, job.gripper.width + job.config.release_clearance)
-        job.gripper.open(width=asked)
-        if job.gripper.width < asked - RELEASE_TOLERANCE:  # retreating now would carry the object away
-            raise JobFailed(f"release: the fingers opened to {1000 * job.gripper.width:.1f} mm of the "
-                            f"{1000 * asked:.1f} mm asked; the object may still be held")
+        _let_go(job, min(job.gripper.stroke, job.gripper.width + job.config.release_clearance))
     with job.stage("retreat"):
         for name in ("retreat", "clear", "home"):
             execute(job.arm, plan.segment(name), tolerance)
@@ -228,6 +233,31 @@ def _place(job: JobContext, plan, sent: np.ndarray) -> None:
         if not ok:
             raise JobFailed(f"place failed: {why}")
         job.result.success, job.result.reason = True, why
+
+
+def _let_go(job: JobContext, asked: float) -> None:
+    """Open the fingers to `asked` m; fingers that stop short are jammed on the object (in the simulated
+    cell: Bullet's finger-hull contacts lock, and any 1 mm move frees them, docs/jobs.md "Jammed
+    releases"), so the tool backs off `RELEASE_BACK_OFF` along its approach, opens again and returns,
+    up to `RELEASE_TRIES` times; JobFailed when it still holds (retreating would carry the object away)."""
+    job.gripper.open(width=asked)
+    T_place = ur_to_pose(job.arm.getActualTCPPose())
+    for tries in range(1, RELEASE_TRIES + 2):
+        if job.gripper.width >= asked - RELEASE_TOLERANCE:
+            break
+        if tries > RELEASE_TRIES:
+            raise JobFailed(f"release: the fingers opened to {1000 * job.gripper.width:.1f} mm of the "
+                            f"{1000 * asked:.1f} mm asked; the object may still be held")
+        T = T_place.copy()
+        T[:3, 3] -= tries * RELEASE_BACK_OFF * T_place[:3, 2]  # the tool's z is its approach axis
+        if not job.arm.moveL(pose_to_ur(T), RELEASE_SPEED, RELEASE_ACCELERATION):
+            raise JobFailed(f"release: backing off the jammed fingers stopped: {job.arm.getLastError()}")
+        job.gripper.open(width=asked)
+        job.result.notes.append(f"release: the fingers jammed; backed off {1000 * tries * RELEASE_BACK_OFF:.0f} mm "
+                                f"and opened to {1000 * job.gripper.width:.1f} mm")
+    if not np.allclose(ur_to_pose(job.arm.getActualTCPPose()), T_place, atol=1e-4) and not job.arm.moveL(
+            pose_to_ur(T_place), RELEASE_SPEED, RELEASE_ACCELERATION):  # the planned retreat starts there
+        raise JobFailed(f"release: returning to the place pose stopped: {job.arm.getLastError()}")
 
 
 def _make_safe(arm: Arm, gripper: Gripper) -> str:

@@ -35,7 +35,7 @@ class JobFailed(RuntimeError):
 
 
 class GraspMissed(JobFailed):
-    """The gripper holds nothing after closing or after the lift."""
+    """The gripper holds nothing after closing, after the lift or after the carry."""
 
 
 @dataclass
@@ -58,13 +58,14 @@ class JobResult:
     look: dict = field(default_factory=dict)  # the second look: points seen, the place it chose, how far it moved
     hole: dict = field(default_factory=dict)  # the handle hole seen in the cloud, if a hang looks for one
     info: dict = field(default_factory=dict)  # the cell's own facts (object, seed, ...)
+    notes: list[str] = field(default_factory=list)  # what the job had to do beyond its plan (a jammed release)
 
     def record(self) -> dict:
         """JSON-ready."""
         return {"task": self.task, "method": self.method, "success": self.success, "failed_stage": self.failed_stage,
                 "reason": self.reason, "seconds": self.seconds, "total_seconds": round(sum(self.seconds.values()), 3),
                 "poses": self.poses, "plan": self.plan, "arm": self.arm, "seen": self.seen, "candidates": self.candidates,
-                "attempts": self.attempts, "look": self.look, "hole": self.hole, **self.info}
+                "attempts": self.attempts, "look": self.look, "hole": self.hole, "notes": self.notes, **self.info}
 
 
 @contextmanager
