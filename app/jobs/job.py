@@ -100,18 +100,18 @@ def _run(job: JobContext) -> None:
         if options is None or np.linalg.norm(cloud.mean(axis=0) - seen) > MOVED:
             options = _imitate(job, cloud)
         seen = cloud.mean(axis=0)
-        plan, chosen = _plan(job, planner, options, cloud)
-        sent = transform_points(chosen.motion, cloud)  # where the object should end
+        pick, chosen = _plan(job, planner, options, cloud)
+        plan, sent = pick, transform_points(chosen.motion, cloud)  # sent: where the object should end
         try:
-            _pick(job, plan)
-            if job.placer is not None:
-                plan, sent = look_and_place(job, planner, plan, chosen, options, cloud)
+            _pick(job, pick)
+            if job.placer is not None:  # the rest planned again from the held views
+                plan, sent = look_and_place(job, planner, pick, chosen, options, cloud)
             _carry(job, plan)
         except GraspMissed as miss:
             job.result.attempts.append({"attempt": attempt, **describe(chosen, str(miss))})
             if attempt == job.config.attempts:
                 raise JobFailed(f"{miss} (attempt {attempt} of {attempt})") from None
-            _recover(job, planner, plan)
+            _recover(job, planner, pick)
             options = [c for c in options if c.grasp_rank != chosen.grasp_rank]
             continue
         except JobFailed as failed:  # the attempt ends the job: its record says how
@@ -203,14 +203,15 @@ def _carry(job: JobContext, plan) -> None:
             raise GraspMissed(f"object dropped during the carry (gripper width {1000 * job.gripper.width:.1f} mm)")
 
 
-def _recover(job: JobContext, planner: Planner, plan) -> None:
-    """After a miss: open, back off along the approach (when still at the grasp), go home."""
+def _recover(job: JobContext, planner: Planner, pick) -> None:
+    """After a miss: open, back off along the approach (when still at the grasp), go home (`pick`: the
+    plan the grasp was made with)."""
     tolerance = job.config.executor.end_tolerance
     with job.stage("recover"):
         job.gripper.open()
         q = job.arm.getActualQ()
-        if np.abs(q - plan.segment("lift").q[0]).max() < tolerance:
-            execute(job.arm, reverse(plan.segment("approach")), tolerance)
+        if np.abs(q - pick.segment("lift").q[0]).max() < tolerance:
+            execute(job.arm, reverse(pick.segment("approach")), tolerance)
         job.scene.remove(OBJECT)  # it may have moved; the next look adds it again
         home = np.asarray(job.config.executor.home_q)
         execute(job.arm, planner.transit(job.arm.getActualQ(), home, "recover"), tolerance)
