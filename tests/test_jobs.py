@@ -133,10 +133,11 @@ class DropsTheObjectOnce(SimHooks):
     the table while the arm carries on."""
 
     dropped = False
+    after = "lift"
 
     def keyframe(self, label: str) -> None:
         super().keyframe(label)
-        if label == "lift" and not self.dropped:
+        if label == self.after and not self.dropped:
             self.cell.gripper.open()
             self.dropped = True
 
@@ -149,6 +150,20 @@ def test_an_object_dropped_on_the_carry_is_looked_for_again_and_picked_again():
     assert "dropped during the carry" in result.attempts[0]["outcome"] and result.attempts[1]["outcome"] == "held"
     assert result.attempts[0]["grasp"] != result.attempts[1]["grasp"]  # imitated again where it fell
     assert "recover" in result.seconds and result.failed_stage is None
+
+
+class DropsTheObjectAfterTheLook(DropsTheObjectOnce):
+    after = "look"
+
+
+@pytest.mark.slow
+def test_a_mug_dropped_on_the_carry_after_the_second_look_is_picked_again():
+    """After the look the rest is planned from the held views (no lift in that plan): the recovery
+    backs off with the pick's plan, and the mug is imitated and picked again where it fell."""
+    result = _sim(JobSpec(task("mug"), seed=3), JobConfig(), hooks_type=DropsTheObjectAfterTheLook)
+    assert "dropped during the carry" in result.attempts[0]["outcome"]
+    assert len(result.attempts) >= 2 and "recover" in result.seconds
+    assert result.success, result.reason
 
 
 @pytest.mark.slow
