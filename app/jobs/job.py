@@ -50,7 +50,9 @@ from hardware.se3 import pose_to_ur, transform_points, ur_to_pose
 __all__ = ["JOB_IMITATION", "STAGES", "GraspMissed", "JobConfig", "JobFailed", "JobHooks", "JobResult", "Predictor",
            "run_job"]
 MOVED = 0.01  # m: a cloud whose centroid moved more than this since the last look is imitated again
-RELEASE_TOLERANCE = 0.005  # m: fingers that stop farther than this short of the opening asked did not let go
+RELEASE_TOLERANCE = 0.005  # m: fingers this close to the opening asked have let go
+RELEASE_FREED = 0.010  # m beyond the held width: fingers that opened this far have left what they held (a mug's
+# inner finger that meets the far wall stops short of the opening asked, the mug let go: oracle seeds 19, 34)
 RELEASE_BACK_OFF = 0.002  # m back along the approach per try when the fingers jam on the release
 RELEASE_TRIES = 3
 RELEASE_SPEED, RELEASE_ACCELERATION = 0.02, 0.5  # m/s, m/s^2 of those few millimetres
@@ -223,7 +225,8 @@ def _place(job: JobContext, plan, sent: np.ndarray) -> None:
     with job.stage("place"):
         execute(job.arm, plan.segment("place"), tolerance)
     with job.stage("release"):
-        _let_go(job, min(job.gripper.stroke, job.gripper.width + job.config.release_clearance))
+        held = job.gripper.width
+        _let_go(job, min(job.gripper.stroke, held + job.config.release_clearance), held)
     with job.stage("retreat"):
         for name in ("retreat", "clear", "home"):
             execute(job.arm, plan.segment(name), tolerance)
@@ -236,15 +239,17 @@ def _place(job: JobContext, plan, sent: np.ndarray) -> None:
         job.result.success, job.result.reason = True, why
 
 
-def _let_go(job: JobContext, asked: float) -> None:
-    """Open the fingers to `asked` m; fingers that stop short are jammed on the object (in the simulated
-    cell: Bullet's finger-hull contacts lock, and any 1 mm move frees them, docs/jobs.md "Jammed
-    releases"), so the tool backs off `RELEASE_BACK_OFF` along its approach, opens again and returns,
-    up to `RELEASE_TRIES` times; JobFailed when it still holds (retreating would carry the object away)."""
+def _let_go(job: JobContext, asked: float, held: float) -> None:
+    """Open the fingers from `held` to `asked` m; fingers that stop short of both the opening asked and
+    `RELEASE_FREED` beyond the held width are jammed on the object (in the simulated cell: Bullet's
+    finger-hull contacts lock, docs/jobs.md "Jammed releases"), so the tool backs off `RELEASE_BACK_OFF`
+    along its approach, opens again and returns, up to `RELEASE_TRIES` times; JobFailed when it still
+    holds (retreating would carry the object away)."""
     job.gripper.open(width=asked)
     T_place = ur_to_pose(job.arm.getActualTCPPose())
+    freed = min(asked - RELEASE_TOLERANCE, held + RELEASE_FREED)
     for tries in range(1, RELEASE_TRIES + 2):
-        if job.gripper.width >= asked - RELEASE_TOLERANCE:
+        if job.gripper.width >= freed:
             break
         if tries > RELEASE_TRIES:
             raise JobFailed(f"release: the fingers opened to {1000 * job.gripper.width:.1f} mm of the "
