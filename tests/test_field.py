@@ -49,27 +49,6 @@ def test_features_match_finite_differences():
     assert torch.autograd.gradcheck(lambda p: field.features(latent, p), (x,), eps=1e-6, atol=1e-5)
 
 
-def test_the_decoder_is_fc_in_of_the_concatenated_input():
-    """The decoder applies the invariant's share of fc_in once per cloud; features and head equal the
-    plain form, fc_in([|q|^2, <q, z_c>, inv(z)]) then the blocks (float64, shipped NIF weights)."""
-    field = load_field("nif").double()
-    d = field.decoder
-    rng = np.random.default_rng(1)
-    latent = field.encode(rng.normal(scale=0.05, size=(500, 3)))
-    q = torch.tensor(rng.normal(scale=0.5, size=(3, 40, 3)))
-    z = latent.z.expand(3, -1, -1)
-    with torch.no_grad():
-        head, features = d(z, q)
-        inv = d.invariant(z.transpose(1, 2)).unsqueeze(1).expand(-1, 40, -1)
-        x = torch.cat([(q * q).sum(-1, keepdim=True), torch.einsum("btd,bcd->btc", q, z), inv], dim=-1)
-        acts, h = [x, d.fc_in(x)], d.fc_in(x)
-        for block in d.blocks:
-            h = block(h)
-            acts.append(h)
-    assert torch.allclose(features, torch.cat(acts, dim=-1), atol=1e-10)
-    assert torch.allclose(head, d.fc_out(torch.relu(h)), atol=1e-10)
-
-
 def test_a_few_steps_lower_the_loss_and_reload_gives_identical_outputs(test_split_data, tmp_path):
     torch.manual_seed(0)
     field = NeuralField(SMALL)

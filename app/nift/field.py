@@ -145,16 +145,13 @@ class Decoder(nn.Module):
         self.fc_out = nn.Linear(cfg.decoder_width, cfg.out_dim)
 
     def forward(self, z: torch.Tensor, q: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
-        """fc_in of [|q|^2, <q, z_c>, inv(z)]: the invariant's share is one bias per cloud, applied once,
-        not at every point (the same sum; imitation evaluates thousands of points a step)."""
-        T, C = q.shape[1], z.shape[1]
+        T = q.shape[1]
         net_z = torch.einsum("btd,bcd->btc", q, z)  # (B, T, C)
-        z_inv = self.invariant(z.transpose(1, 2))  # (B, C)
-        r = (q * q).sum(-1, keepdim=True)  # (B, T, 1)
-        W = self.fc_in.weight  # (W, 1 + 2C)
-        bias = z_inv @ W[:, 1 + C:].T + self.fc_in.bias  # (B, W)
-        h = r * W[:, 0] + net_z @ W[:, 1:1 + C].T + bias[:, None]  # (B, T, W)
-        acts = [r, net_z, z_inv[:, None].expand(-1, T, -1), h]  # the input (1 + 2C) and fc_in's output
+        z_inv = self.invariant(z.transpose(1, 2)).unsqueeze(1).expand(-1, T, -1)  # (B, T, C)
+        h = torch.cat([(q * q).sum(-1, keepdim=True), net_z, z_inv], dim=-1)  # (B, T, 1 + 2C)
+        acts = [h]
+        h = self.fc_in(h)
+        acts.append(h)
         for block in self.blocks:
             h = block(h)
             acts.append(h)
