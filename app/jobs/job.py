@@ -242,9 +242,9 @@ def _place(job: JobContext, plan, sent: np.ndarray) -> None:
 def _let_go(job: JobContext, asked: float, held: float) -> None:
     """Open the fingers from `held` to `asked` m; fingers that stop short of both the opening asked and
     `RELEASE_FREED` beyond the held width are jammed on the object (in the simulated cell: Bullet's
-    finger-hull contacts lock, docs/jobs.md "Jammed releases"), so the tool backs off `RELEASE_BACK_OFF`
-    along its approach, opens again and returns, up to `RELEASE_TRIES` times; JobFailed when it still
-    holds (retreating would carry the object away)."""
+    finger-hull contacts lock, docs/jobs.md), so the tool backs off `RELEASE_BACK_OFF` along its
+    approach, opens again and returns, up to `RELEASE_TRIES` times; JobFailed when it still holds
+    (retreating would carry the object away)."""
     job.gripper.open(width=asked)
     T_place = ur_to_pose(job.arm.getActualTCPPose())
     freed = min(asked - RELEASE_TOLERANCE, held + RELEASE_FREED)
