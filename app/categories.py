@@ -5,3 +5,4 @@ IN_DOMAIN: tuple[str, ...] = ("mug", "bowl", "bottle")  # vases stay out of trai
 # upright: standing at a random yaw; arbitrary: a Haar-random rotation held in mid-air until grasped
 # (the paper's teleported protocol); resting: dropped from a Haar-random rotation, settled on the table
 POSES: tuple[str, ...] = ("upright", "arbitrary", "resting")
+REVOLUTION: tuple[str, ...] = ("bowl", "bottle", "vase")  # bodies of revolution about z: a grasp turned about it is the same grasp

@@ -452,3 +452,38 @@ def test_a_pick_alone_ends_at_the_lift_and_its_place_planned_from_there_ends_at_
     assert [s.label for s in rest.segments] == ["carry", "place", "retreat", "clear", "home"]
     assert np.allclose(rest.segment("carry").q[0], pick.segment("lift").end)
     assert np.allclose(kin.fk(rest.segment("place").end), T_place, atol=1e-4)
+
+
+class _DriverArm:
+    """Stands at q; runs a trajectory only if it starts within 0.01 rad of it (the drivers' check)."""
+
+    def __init__(self, q):
+        self.q, self.ran = np.asarray(q, float), None
+
+    def getActualQ(self):
+        return self.q.copy()
+
+    def getLastError(self):
+        return ""
+
+    def executeTrajectory(self, times, q, qd=None):
+        if np.abs(q[0] - self.q).max() > 0.01:
+            raise ValueError("trajectory does not start at the arm's current joint positions")
+        self.ran, self.q = np.asarray(q).copy(), np.asarray(q[-1], float).copy()
+        return True
+
+
+def test_a_segment_starts_where_a_sagging_arm_stands_and_a_far_one_is_still_refused():
+    """An arm left 0.012 rad off the next segment's start (within the 0.02 rad end tolerance) runs it from
+    where it stands; 0.03 rad off, the driver's refusal stands."""
+    from app.motion.executor import execute
+    from app.motion.trajectory import JointTrajectory
+
+    path = np.linspace(np.zeros(6), np.full(6, 0.5), 50)
+    traj = JointTrajectory(np.linspace(0.0, 1.0, 50), path, np.gradient(path, axis=0), "retreat")
+    sagged = np.array([0.0, 0.012, 0.0, 0.0, 0.0, 0.0])
+    arm = _DriverArm(sagged)
+    execute(arm, traj, 0.02)
+    assert np.allclose(arm.ran[0], sagged) and np.allclose(arm.ran[1:], path[1:]) and np.allclose(arm.q, path[-1])
+    with pytest.raises(ValueError, match="does not start"):
+        execute(_DriverArm(sagged * 2.5), traj, 0.02)

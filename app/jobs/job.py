@@ -25,6 +25,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from app.categories import REVOLUTION
 from app.jobs.check import placed
 from app.jobs.choice import NoCandidate, choose, describe
 from app.jobs.clearance import gripper_clear
@@ -42,6 +43,7 @@ from app.predict.grasp_centering import held_width
 from app.predict.hole_places import with_hole_pairs
 from app.predict.predict import Prediction, predict, predict_place
 from app.predict.table_clearance import backed_off_table
+from app.predict.turned_grasps import turned_pairs
 from app.tasks.task import Task
 from hardware.interfaces import Arm, DepthCamera, Gripper
 from hardware.kinematics import UR5Kinematics
@@ -168,7 +170,14 @@ def _plan(job: JobContext, planner: Planner, options: list, cloud: np.ndarray):
                             job.config.most_plans, widths, pick_only=job.placer is not None)
         except NoCandidate as exc:
             job.result.candidates += exc.tried
-            raise
+            turned = turned_pairs(options, cloud) if job.t.category in REVOLUTION else []
+            if not turned:
+                raise
+            try:  # the same grasps at another point of the rim or the neck: their own budget of plans
+                choice = choose(planner, turned, q, job.place_line(cloud), failure, job.config.most_plans, widths)
+            except NoCandidate as more:
+                job.result.candidates += more.tried
+                raise exc from None
         job.result.candidates += choice.tried
         plan = choice.plan
         job.result.poses["grasp"] = ur(plan.T_base_grasp)

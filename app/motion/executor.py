@@ -283,8 +283,19 @@ def reverse(traj: JointTrajectory) -> JointTrajectory:
     return JointTrajectory(traj.times, traj.q[::-1].copy(), -traj.qd[::-1].copy(), traj.label)
 
 
+START_GAP = 0.01  # rad: a trajectory the arm's drivers run must start this close to its joints
+
+
 def execute(arm: Arm, traj: JointTrajectory, tolerance: float = 0.02) -> None:
-    """Run a planned trajectory on the arm; ExecutionError on a stop or if it ends off target."""
+    """Run a planned trajectory on the arm; ExecutionError on a stop or if it ends off target. An arm
+    that the last segment left within `tolerance` of this one's start but not within START_GAP (the
+    drivers refuse a path that does not start where the arm is; a loaded arm sags that far) starts
+    the path from where it stands: its first sample becomes the arm's joints."""
+    q_now = arm.getActualQ()
+    if START_GAP < float(np.abs(q_now - traj.q[0]).max()) <= tolerance:
+        q = traj.q.copy()
+        q[0] = q_now
+        traj = JointTrajectory(traj.times, q, traj.qd, traj.label)
     if not arm.executeTrajectory(traj.times, traj.q, traj.qd):
         raise ExecutionError(f"{traj.label}: {arm.getLastError() or 'motion stopped'}")
     error = float(np.abs(arm.getActualQ() - traj.end).max())

@@ -5,13 +5,13 @@ from __future__ import annotations
 import numpy as np
 import trimesh
 
+from app.categories import REVOLUTION
 from app.predict.candidates import Candidate
 from app.predict.methods import ORACLE
 from app.predict.predict import Prediction
 from app.tasks.task import Task, teacher_grasp, teacher_place
 from hardware.se3 import invert, make_pose, rotvec_to_matrix
 
-REVOLUTION = ("bowl", "bottle", "vase")  # bodies of revolution about z: a grasp turned about it is the same grasp
 TURNS = 12  # such turns of the teacher's grasp (30 degrees apart) the cell's oracle offers
 
 
