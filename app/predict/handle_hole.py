@@ -79,14 +79,21 @@ def body_residuals(x: np.ndarray, flat: np.ndarray, h: np.ndarray) -> np.ndarray
     return np.linalg.norm(flat - x[:2], axis=1) - (x[2] + x[3] * h)
 
 
+def kasa_circle(flat: np.ndarray) -> tuple[np.ndarray, float]:
+    """Centre (2,) and radius of the algebraic (Kasa) least-squares circle through points (M, 2):
+    |p|^2 = 2 c.p + (r^2 - |c|^2), linear in c and r^2 - |c|^2; an arc is enough."""
+    A = np.column_stack([2 * flat, np.ones(len(flat))])
+    sol = np.linalg.lstsq(A, (flat ** 2).sum(axis=1), rcond=None)[0]
+    return sol[:2], float(np.sqrt(max(sol[2] + sol[:2] @ sol[:2], 0.0)))
+
+
 def fit_body(flat: np.ndarray, h: np.ndarray, config: "HoleConfig") -> np.ndarray:
     """The body x (`body_residuals`) fitted with a soft-L1 loss (the handle's points are outliers),
-    radius bounded to config.radius_range, from an algebraic circle's start (Kasa)."""
-    A = np.column_stack([2 * flat, np.ones(len(flat))])  # |p|^2 = 2 c.p + (r^2 - |c|^2)
-    sol = np.linalg.lstsq(A, (flat ** 2).sum(axis=1), rcond=None)[0]
+    radius bounded to config.radius_range, from an algebraic circle's start (`kasa_circle`)."""
+    centre, radius = kasa_circle(flat)
     lo, hi = config.radius_range
-    r0 = float(np.clip(np.sqrt(max(sol[2] + sol[:2] @ sol[:2], 0.0)), lo, hi))
-    c = sol[:2] if np.linalg.norm(sol[:2]) < hi else np.zeros(2)
+    r0 = float(np.clip(radius, lo, hi))
+    c = centre if np.linalg.norm(centre) < hi else np.zeros(2)
     bounds = ([-hi, -hi, lo, -1.0], [hi, hi, hi, 1.0])
     start = np.clip([*c, r0, 0.0], bounds[0], bounds[1])
     return least_squares(body_residuals, start, args=(flat, h), bounds=bounds, loss="soft_l1",

@@ -6,7 +6,7 @@ turned by A (a rotation about that axis) holds it as well, and the pair keeps it
 fixture as seen turned too (seen' = A seen), the object's motion becomes motion A^-1 and the TCP at
 the place  motion A^-1 A G = motion G  is the same pose - the object arrives turned about its own
 axis, which does not matter. The axis is where the cloud's slice at the grasp's height is centred
-(a circle fitted to the slice, Kasa's algebraic fit: one Kinect sees an arc, whose centroid would lie
+(a circle fitted to the slice, `app.predict.handle_hole.kasa_circle`: one Kinect sees an arc, whose centroid would lie
 towards the camera); a turned grasp that no longer closes on the cloud is dropped.
 """
 from __future__ import annotations
@@ -17,6 +17,7 @@ import numpy as np
 
 from app.predict.candidates import Candidate
 from app.predict.feasibility import grips_something
+from app.predict.handle_hole import kasa_circle
 from hardware.se3 import make_pose, rotvec_to_matrix
 
 TURNS_DEG = (60.0, -60.0, 120.0, -120.0, 180.0)  # nearest first
@@ -31,10 +32,8 @@ def slice_centre(cloud: np.ndarray, z: float) -> np.ndarray | None:
     ring = cloud[np.abs(cloud[:, 2] - z) < SLICE][:, :2]  # (M, 2)
     if len(ring) < MIN_SLICE_POINTS:
         return None
-    A = np.column_stack([2 * ring, np.ones(len(ring))])  # |p|^2 = 2 c.p + (r^2 - |c|^2)
-    c0, c1, k = np.linalg.lstsq(A, (ring ** 2).sum(axis=1), rcond=None)[0]
-    radius = np.sqrt(max(k + c0 * c0 + c1 * c1, 0.0))
-    return np.array([c0, c1]) if RADIUS_RANGE[0] <= radius <= RADIUS_RANGE[1] else None
+    centre, radius = kasa_circle(ring)
+    return centre if RADIUS_RANGE[0] <= radius <= RADIUS_RANGE[1] else None
 
 
 def about_vertical(centre: np.ndarray, degrees: float) -> np.ndarray:
