@@ -8,7 +8,7 @@ from dataclasses import replace
 import numpy as np
 
 from app.jobs.context import JobContext
-from app.jobs.record import GraspMissed, JobFailed, ur
+from app.jobs.record import JobFailed, check_held, ur
 from app.jobs.second_look import second_look
 from app.motion.executor import OBJECT, FingerWidths, Planner
 from app.motion.ik import NoIKSolution
@@ -34,8 +34,7 @@ def look_and_place(job: JobContext, planner: Planner, plan, chosen: Candidate, o
                                 job.config.executor.end_tolerance, job.config.look, job.config.perception)
         except (ValueError, NoIKSolution) as exc:  # nothing seen, or no way to show it: go on with the first look
             views, look = None, {"used": False, "why": str(exc)}
-        if not job.gripper.object_detected:
-            raise GraspMissed(f"object dropped during the second look (gripper width {1000 * job.gripper.width:.1f} mm)")
+        check_held(job.gripper, "second look")
         tries = []  # (pair, the cloud it moves, whether the look gave it)
         if views is not None:
             points = np.concatenate([job.points, *views])

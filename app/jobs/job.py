@@ -31,7 +31,7 @@ from app.jobs.choice import NoCandidate, choose, describe
 from app.jobs.clearance import gripper_clear
 from app.jobs.context import JobContext, Predictor
 from app.jobs.held_place import look_and_place
-from app.jobs.record import STAGES, GraspMissed, JobFailed, JobHooks, JobResult, ur
+from app.jobs.record import STAGES, GraspMissed, JobFailed, JobHooks, JobResult, check_held, ur
 from app.jobs.settings import JOB_IMITATION, JobConfig, looks_again
 from app.motion.executor import OBJECT, FingerWidths, Planner, execute, reverse
 from app.motion.ik import reach_failure
@@ -201,8 +201,7 @@ def _pick(job: JobContext, plan) -> None:
         job.hooks.on_grasped()
     with job.stage("lift"):
         execute(job.arm, plan.segment("lift"), tolerance)
-        if not job.gripper.object_detected:
-            raise GraspMissed(f"object dropped during the lift (gripper width {1000 * job.gripper.width:.1f} mm)")
+        check_held(job.gripper, "lift")
 
 
 def _carry(job: JobContext, plan) -> None:
@@ -210,8 +209,7 @@ def _carry(job: JobContext, plan) -> None:
     in the cell now: the next attempt looks for it again)."""
     with job.stage("carry"):
         execute(job.arm, plan.segment("carry"), job.config.executor.end_tolerance)
-        if not job.gripper.object_detected:
-            raise GraspMissed(f"object dropped during the carry (gripper width {1000 * job.gripper.width:.1f} mm)")
+        check_held(job.gripper, "carry")
 
 
 def _recover(job: JobContext, planner: Planner, pick) -> None:

@@ -9,6 +9,7 @@ import numpy as np
 
 from app.motion.executor import ExecutionError
 from app.motion.ik import NoIKSolution
+from hardware.interfaces import Gripper
 from hardware.se3 import pose_to_ur
 
 STAGES = ("capture", "perceive", "imitate", "plan", "approach", "grasp", "lift", "recover", "look", "carry", "place",
@@ -35,7 +36,13 @@ class JobFailed(RuntimeError):
 
 
 class GraspMissed(JobFailed):
-    """The gripper holds nothing after closing, after the lift or after the carry."""
+    """The gripper holds nothing after closing, after the lift, the second look or the carry."""
+
+
+def check_held(gripper: Gripper, during: str) -> None:
+    """GraspMissed when the gripper no longer holds the object after the motion `during`."""
+    if not gripper.object_detected:
+        raise GraspMissed(f"object dropped during the {during} (gripper width {1000 * gripper.width:.1f} mm)")
 
 
 @dataclass
