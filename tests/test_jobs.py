@@ -177,13 +177,45 @@ def test_a_mug_whose_inner_finger_meets_the_far_wall_is_let_go():
 
 
 @pytest.mark.slow
-def test_a_release_whose_fingers_jam_backs_off_and_lets_go():
-    """The oracle's bowl of seed 30: its fingers stop at 7 mm on the release (Bullet's finger-hull
-    contacts lock, docs/jobs.md); backed off 4 mm along the approach they open, and the bowl stands."""
-    result = _sim(JobSpec(task("bowl"), seed=30))
+@pytest.mark.parametrize("seed", [4, 30])
+def test_a_bowl_let_go_on_the_shelf_stays_where_it_was_put(seed):
+    """The oracle's bowls of seeds 4 and 30: the fingers opened on contact points Bullet had kept with
+    reversed normals, and seed 4's opening finger dragged the bowl 2 cm along and the retreat off the
+    shelf, seed 30's fingers locked at 7 mm. The gripper now forgets its contacts as it opens
+    (`SimGripper._forget_finger_contacts`): the bowl stays within 5 mm of where the release found it."""
+    at = {}
+
+    class Watch(SimHooks):
+        def keyframe(self, label: str) -> None:
+            if label in ("place", "release"):
+                at[label] = self.cell.world.pose(self.obj.body)[:3, 3]
+
+    result = _sim(JobSpec(task("bowl"), seed=seed), hooks_type=Watch)
     assert result.success, result.reason
-    assert result.notes and all(n.startswith("release: the fingers jammed") for n in result.notes)
-    assert float(result.notes[-1].split()[-2]) > 40.0  # mm the fingers opened to after the last back-off
+    assert result.notes == []  # let go at the first opening
+    assert np.linalg.norm(at["release"] - at["place"]) < 0.005
+
+
+@pytest.mark.slow
+def test_a_release_whose_fingers_jam_backs_off_and_lets_go(monkeypatch):
+    """Fingers that stay on the object at the first opening (a snag): the tool backs off 2 mm along its
+    approach, opens again, and the bowl stands; the record says so."""
+    from hardware.sim.gripper import SimGripper
+
+    opened, calls = SimGripper.open, []
+
+    def snags_once(self, speed=0.1, width=None):
+        calls.append(width)
+        if width is not None and len([w for w in calls if w is not None]) == 2:  # the release's first opening
+            self._detected = False
+            return None
+        return opened(self, speed, width)
+
+    monkeypatch.setattr(SimGripper, "open", snags_once)
+    result = _sim(JobSpec(task("bowl"), seed=4))
+    assert result.success, result.reason
+    assert len(result.notes) == 1 and result.notes[0].startswith("release: the fingers jammed; backed off 2 mm")
+    assert float(result.notes[0].split()[-2]) > 40.0  # mm the fingers opened to after the back-off
 
 
 def test_a_pose_where_every_grasp_is_in_the_table_says_no_grasp_like_the_demos_exists():

@@ -64,6 +64,7 @@ class SimGripper(Gripper):
         if width is not None and not 0.0 < width <= self.stroke:
             raise ValueError(f"gripper opening must be in (0, {self.stroke}] m, got {width}")
         self._detected = False
+        self._forget_finger_contacts()
         self._drive((self.stroke if width is None else width) / 2, self.max_force, speed)
 
     def close(self, force: float = 40.0, speed: float = 0.05) -> bool:
@@ -73,6 +74,27 @@ class SimGripper(Gripper):
         self._drive(0.0, force, speed)
         self._detected = self.width > CLOSED_TOLERANCE
         return self._detected
+
+    def _forget_finger_contacts(self) -> None:
+        """Drop the contact points Bullet keeps between the fingers and what they touch, so that the
+        opening starts from contacts found afresh in the geometry.
+
+        Bullet carries a pair's contact points from step to step (its persistent manifold) and only
+        updates their depth along the normal stored when each was found. A point found with its normal
+        reversed (a finger pressed into a thin rim's convex parts) then holds the object to the pad:
+        an opening finger dragged the oracle's bowls 2 cm along and the retreat carried them off the
+        shelf (docs/jobs.md, "Bowls dragged off the shelf"). Switching the pair's collisions off for
+        one step empties the manifold; nothing is pressed that step, as the fingers are letting go."""
+        r = self.robot
+        pairs = {(link, c[2], c[4]) for link in r.finger_joints
+                 for c in p.getContactPoints(bodyA=r.body, linkIndexA=link, physicsClientId=r.client) if c[2] != r.body}
+        if not pairs:
+            return
+        for enable in (0, 1):
+            for link, body, other_link in sorted(pairs):
+                p.setCollisionFilterPair(r.body, body, link, other_link, enable, physicsClientId=r.client)
+            if not enable:
+                r.world.step()
 
     def _finger_state(self) -> tuple[np.ndarray, np.ndarray]:
         states = p.getJointStates(self.robot.body, self.robot.finger_joints, physicsClientId=self.robot.client)
