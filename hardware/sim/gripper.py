@@ -79,12 +79,13 @@ class SimGripper(Gripper):
         """Drop the contact points Bullet keeps between the fingers and what they touch, so that the
         opening starts from contacts found afresh in the geometry.
 
-        Bullet carries a pair's contact points from step to step (its persistent manifold) and only
-        updates their depth along the normal stored when each was found. A point found with its normal
-        reversed (a finger pressed into a thin rim's convex parts) then holds the object to the pad:
-        an opening finger dragged the oracle's bowls 2 cm along and the retreat carried them off the
-        shelf (docs/jobs.md, "Bowls dragged off the shelf"). Switching the pair's collisions off for
-        one step empties the manifold; nothing is pressed that step, as the fingers are letting go."""
+        Bullet carries a pair's contact points from step to step (its persistent manifold) and
+        refreshes their depth along the normal each was found with. A point kept with its normal
+        reversed (a pad pressed into a thin rim's convex parts) holds the object to the pad: opening
+        fingers dragged the oracle's bowls 2 cm along and the retreat carried them off the shelf
+        (docs/jobs.md, "Objects dragged off the shelf on the release"). Switching the touched pairs'
+        collisions off for one step empties their manifolds; nothing is pressed that step, as the
+        fingers are letting go. No contact, no step: an open gripper's opening is unchanged."""
         r = self.robot
         pairs = {(link, c[2], c[4]) for link in r.finger_joints
                  for c in p.getContactPoints(bodyA=r.body, linkIndexA=link, physicsClientId=r.client) if c[2] != r.body}
