@@ -1,5 +1,5 @@
 """What the fingers touch while they let go (docs/jobs.md, "Objects dragged off the shelf on the
-release"): runs the oracle's job on a seed and prints, at the place, every 40 steps of the release's
+release"): runs the oracle's (or a method's) job on a seed and prints, at the place, every 40 steps of the release's
 opening and after it, where the object is and each finger contact: its force, its point and its normal
 (Bullet's, on the finger, pointing towards the object) in the TCP frame (y: the fingers' axis).
 
@@ -7,7 +7,7 @@ A normal whose y points away from the object (the outer finger's -y contact poin
 object to the pad: it follows the finger as it opens. `--keep-contacts` runs the gripper as it was
 before `SimGripper._forget_finger_contacts`, to see that.
 
-Usage (repo root): .venv/bin/python scripts/diagnose_release_drag.py TASK SEED [--keep-contacts]
+Usage (repo root): .venv/bin/python scripts/diagnose_release_drag.py TASK SEED [--method M] [--keep-contacts]
     [--calibration FILE]       e.g. `bowl 4 --keep-contacts` (~10 s)
 """
 import argparse
@@ -77,6 +77,7 @@ def watched_drive(drive):
 parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
 parser.add_argument("task")
 parser.add_argument("seed", type=int)
+parser.add_argument("--method", default="teacher", help="the method whose poses the job takes (default: the oracle)")
 parser.add_argument("--keep-contacts", action="store_true", help="the gripper as before: contacts kept on opening")
 parser.add_argument("--calibration", type=Path, default=None, help="camera calibration file (calibrated first if missing)")
 args = parser.parse_args()
@@ -88,7 +89,7 @@ with SimCell(config) as cell:
     scene = PlanningScene(config)
     T_cam = np.array(cell.camera.config.T_base_cam) if args.calibration is None else ensure_calibration(cell, args.calibration)
     try:
-        result = run_sim_job(cell, scene, T_cam, JobSpec(task(args.task), args.seed), JobConfig(method="teacher"),
+        result = run_sim_job(cell, scene, T_cam, JobSpec(task(args.task), args.seed), JobConfig(method=args.method),
                              hooks_type=Watch)
     finally:
         scene.close()
