@@ -160,7 +160,7 @@ class DropsTheObjectAfterTheLook(DropsTheObjectOnce):
 def test_a_mug_dropped_on_the_carry_after_the_second_look_is_picked_again():
     """After the look the rest is planned from the held views (no lift in that plan): the recovery
     backs off with the pick's plan, and the mug is imitated and picked again where it fell."""
-    result = _sim(JobSpec(task("mug"), seed=2), JobConfig(), hooks_type=DropsTheObjectAfterTheLook)
+    result = _sim(JobSpec(task("mug"), seed=0), JobConfig(), hooks_type=DropsTheObjectAfterTheLook)
     assert "dropped during the carry" in result.attempts[0]["outcome"]
     assert len(result.attempts) >= 2 and "recover" in result.seconds
     assert result.success, result.reason
@@ -270,19 +270,18 @@ def test_a_job_that_looks_again_picks_a_reachable_grasp_whose_first_look_place_i
 
 @pytest.mark.slow
 def test_a_mug_hung_at_its_hang_drags_on_the_peg_only_when_bullet_thickens_the_hulls():
-    """The oracle's mug of seed 9 placed at its hang (no clearance): at Bullet's default hull margin
-    (1 mm) the job fails; at the cell's 0.2 mm (`SimWorldConfig.mesh_margin`) the peg passes through
-    the handle's hole and it hangs, as it does placed `ExecutorConfig.peg_clearance` (12 mm) above and
-    dropped. (Seed 5 showed it while the grip pressed 23 N of the 40 N asked and the mug turned in it;
-    at the force asked 10 of seeds 0-11 hang at 1 mm too.)"""
+    """The oracle's mug of seed 5 placed at its hang (no clearance): at Bullet's default hull margin
+    (1 mm) its handle's hole closes on the peg, the handle drags along the place line and the job
+    fails; at the cell's 0.2 mm (`SimWorldConfig.mesh_margin`) the peg passes through and it hangs,
+    as it does placed `ExecutorConfig.peg_clearance` (12 mm) above and dropped."""
     from app.motion.executor import ExecutorConfig
 
     at_hang = JobConfig(method="teacher", executor=ExecutorConfig(peg_clearance=0.0))
     thick = replace(CellConfig(), world=replace(CellConfig().world, mesh_margin=0.001))
-    assert not _sim(JobSpec(task("mug"), seed=9), at_hang, config=thick).success
-    result = _sim(JobSpec(task("mug"), seed=9), at_hang)
+    assert not _sim(JobSpec(task("mug"), seed=5), at_hang, config=thick).success
+    result = _sim(JobSpec(task("mug"), seed=5), at_hang)
     assert result.success, result.reason
-    result = _sim(JobSpec(task("mug"), seed=9))
+    result = _sim(JobSpec(task("mug"), seed=5))
     assert result.success, result.reason
 
 

@@ -11,10 +11,6 @@ from hardware.settings import check_ranges
 from hardware.sim.robot import SimRobot
 
 CLOSED_TOLERANCE = 0.002  # m: a closed gripper narrower than this holds nothing
-# m/s: the fingers' motor speed limit while they squeeze a held object. Bullet's motor pushes a blocked
-# finger only as hard as its speed limit lets it (about 23 N at the closing speed of 0.05 m/s, whatever
-# force was asked above that); at this limit the force asked is what the pads press (tests/test_gripper_force.py)
-SQUEEZE_SPEED = 1.0
 
 
 @dataclass(frozen=True)
@@ -77,8 +73,6 @@ class SimGripper(Gripper):
             raise ValueError(f"grip force must be in (0, {self.max_force}] N, got {force}")
         self._drive(0.0, force, speed)
         self._detected = self.width > CLOSED_TOLERANCE
-        if self._detected:  # squeeze: the force limit must bind, see SQUEEZE_SPEED
-            self._command(0.0, force, SQUEEZE_SPEED)
         return self._detected
 
     def _forget_finger_contacts(self) -> None:
