@@ -87,7 +87,7 @@ class SimGripper(Gripper):
         collisions off for one step empties their manifolds; nothing is pressed that step, as the
         fingers are letting go. No contact, no step: an open gripper's opening is unchanged."""
         r = self.robot
-        pairs = {(link, c[2], c[4]) for link in r.finger_joints
+        pairs = {(link, c[2], c[4]) for link in r.finger_links
                  for c in p.getContactPoints(bodyA=r.body, linkIndexA=link, physicsClientId=r.client) if c[2] != r.body}
         if not pairs:
             return
