@@ -175,6 +175,23 @@ class Arm(Device):
         """Why the last motion did not complete ('' if it did)."""
 
     @abstractmethod
+    def getActualTCPForce(self) -> np.ndarray:
+        """External wrench on the tool [Fx, Fy, Fz, Tx, Ty, Tz] (N, N m) in the base frame, about the TCP."""
+
+    @abstractmethod
+    def startContactDetection(self) -> bool:
+        """Until stopContactDetection(): a motion ends early, at rest and without a protective stop, once
+        the tool meets something (the external force on it passes the controller's contact threshold)."""
+
+    @abstractmethod
+    def readContactDetection(self) -> bool:
+        """True if a contact stopped a motion since startContactDetection()."""
+
+    @abstractmethod
+    def stopContactDetection(self) -> bool:
+        """End contact detection; True if a contact was detected meanwhile."""
+
+    @abstractmethod
     def teachMode(self) -> bool:
         """Freedrive: the joints yield to the operator's hand until endTeachMode(); motions are refused meanwhile."""
 

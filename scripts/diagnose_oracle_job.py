@@ -32,6 +32,9 @@ class Watch(SimHooks):
         T_tcp_obj = invert(ur_to_pose(self.cell.arm.getActualTCPPose())) @ self.cell.world.pose(self.obj.body)
         self.poses = {**getattr(self, "poses", {}), label: T_tcp_obj}
         self.widths = {**getattr(self, "widths", {}), label: self.cell.gripper.width}
+        fixture = self.cell.fixtures[self.task.fixture]
+        on = "on the fixture" if self.cell.world.in_contact(self.obj.body, fixture) else "off the fixture"
+        self.where = {**getattr(self, "where", {}), label: f"{on}, z {self.cell.world.pose(self.obj.body)[2, 3]:.3f}"}
 
 
 def touched_when_stopped(arm: sim_arm.SimArm) -> list[str]:
@@ -39,19 +42,23 @@ def touched_when_stopped(arm: sim_arm.SimArm) -> list[str]:
     robot = arm.robot
     contacts = p.getContactPoints(bodyA=robot.body, physicsClientId=robot.client)
     links = {index: name for name, index in robot.links.items()}
-    return sorted({f"{links.get(c[3], c[3])}-body{c[2]} {c[9]:.0f} N" for c in contacts if c[2] != robot.body and c[9] > 1})
+    def name(body: int) -> str:
+        mass = p.getDynamicsInfo(body, -1, physicsClientId=robot.client)[0]
+        return f"body{body}" + (f" ({mass:.2f} kg)" if mass else " (static)")
+    return sorted({f"{links.get(c[3], c[3])}-{name(c[2])} {c[9]:.0f} N" for c in contacts if c[2] != robot.body and c[9] > 1})
 
 
 parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
 parser.add_argument("task")
 parser.add_argument("pose")
 parser.add_argument("seeds", nargs="+", type=int)
+parser.add_argument("--method", default="teacher", help="teacher (the oracle) or a method of `nift run`")
 parser.add_argument("--peg-clearance", type=float, default=None)
 parser.add_argument("--release-clearance", type=float, default=None)
 parser.add_argument("--approach-clearance", type=float, default=None)
 parser.add_argument("--calibration", type=Path, default=None, help="camera calibration file (calibrated first if missing)")
 args = parser.parse_args()
-job = JobConfig(method="teacher")
+job = JobConfig(method=args.method)
 if args.peg_clearance is not None:
     job = replace(job, executor=replace(job.executor, peg_clearance=args.peg_clearance))
 for name in ("release_clearance", "approach_clearance"):
@@ -87,5 +94,7 @@ for seed in args.seeds:
     print("  turned in the grasp (deg): " + "  ".join(f"{k} {v:.1f}" for k, v in turns.items()))
     if "release" in w.widths:
         print(f"  fingers after letting go: {1000 * w.widths['release']:.1f} mm")
+    print("  the object after each stage: " + "; ".join(f"{k}: {v}" for k, v in w.where.items()
+                                                          if k in ("place", "release", "retreat", "verify") or "failed" in k))
     if stops:
         print(f"  touching when the arm stopped: {stops[0] or 'nothing'}")

@@ -105,6 +105,42 @@ def test_a_job_whose_best_candidate_is_unreachable_takes_the_next_one_and_succee
     assert result.candidates[1]["grasp_rank"] == 1 and result.attempts[0]["outcome"] == "held"
 
 
+@pytest.mark.slow
+@pytest.mark.parametrize("shift", [0.03, -0.03])
+def test_an_approach_that_meets_the_object_stops_backs_off_and_takes_the_next_grasp(shift):
+    """The best grasp is the oracle's moved 3 cm along the fingers' axis: a finger comes down on the
+    mug's rim and presses it into the table. Contact detection stops the arm at rest (no protective stop), it backs off, and the
+    next candidate (the oracle's own) is grasped and placed; both attempts are recorded."""
+    def predictor_of(cell):
+        def with_a_finger_on_the_rim(obj):
+            oracle = teacher_predictor(cell, obj, task("mug"))
+
+            def predict(cloud):
+                pred = oracle(cloud)
+                good = pred.options()[0]
+                T = good.T_base_tcp.copy()
+                T[:3, 3] += shift * T[:3, 1]  # the tool's y: the fingers' axis
+                pred.candidates = [replace(good, T_base_tcp=T), replace(good, score=0.5, grasp_rank=1)]
+                return pred
+            return predict
+        return with_a_finger_on_the_rim
+
+    config = CellConfig()
+    with SimCell(config) as cell:
+        scene = PlanningScene(config)
+        try:
+            result = run_sim_job(cell, scene, np.array(cell.camera.config.T_base_cam), JobSpec(task("mug"), seed=0),
+                                 JobConfig(method="teacher"), predictor_of=predictor_of(cell))
+            stopped = cell.arm.isProtectiveStopped()
+        finally:
+            scene.close()
+    assert result.success, result.reason
+    assert not stopped
+    first, second = result.attempts
+    assert "the tool met something" in first["outcome"] and "contact detected" in first["outcome"], first
+    assert first["grasp_rank"] == 0 and second["grasp_rank"] == 1 and second["outcome"] == "held"
+
+
 class MovesTheObjectOnce(SimHooks):
     """Once the first plan is made, the object is pushed 12 cm aside: the grasp must miss."""
 

@@ -94,6 +94,40 @@ def test_protective_stop_on_collision_with_the_table(rig):
     assert arm.moveJ(HOME_Q)
 
 
+def test_contact_detection_ends_a_motion_at_rest_without_a_protective_stop(rig):
+    """The same line into the table as above, under contact detection: the tool meets the table, the
+    arm stops there unlocked, and moves again at once."""
+    world, robot, arm, _ = rig
+    below_table = arm.getActualTCPPose()
+    below_table[2] = -0.2
+    assert arm.startContactDetection() and not arm.readContactDetection()
+    assert not arm.moveL(below_table, speed=0.2)
+    assert not arm.isProtectiveStopped() and "contact detected" in arm.getLastError()
+    assert arm.readContactDetection()
+    assert -0.02 < arm.getActualTCPPose()[2] < 0.05  # at the table, the fingers on it
+    assert np.linalg.norm(arm.getActualQd()) < 0.05
+    assert arm.stopContactDetection() and not arm.readContactDetection()
+    assert arm.moveJ(HOME_Q), arm.getLastError()
+
+
+def test_the_wrist_reads_a_held_boxs_weight(rig):
+    """Nothing touched: no wrench. A 0.5 kg box held at the TCP: the squeeze cancels between the pads,
+    the force is its weight, straight down, and about the TCP (the box's centre on the tool's axis) no torque."""
+    from hardware.bullet import p
+    from hardware.se3 import ur_to_pose
+
+    world, robot, arm, gripper = rig
+    assert np.allclose(arm.getActualTCPForce(), 0.0)
+    T = ur_to_pose(arm.getActualTCPPose())
+    box = world.add_box((0.03, 0.03, 0.03), T[:3, 3] + T[:3, :3] @ [0.0, 0.0, 0.01])  # static while closing
+    assert gripper.close(force=30.0)
+    p.changeDynamics(box, -1, mass=0.5, physicsClientId=robot.client)
+    world.step(240)
+    wrench = arm.getActualTCPForce()
+    assert np.allclose(wrench[:3], [0.0, 0.0, -0.5 * 9.81], atol=0.05), wrench
+    assert np.abs(wrench[3:]).max() < 0.01, wrench
+
+
 def test_gripper_closes_on_nothing_and_opens(rig):
     _, _, _, gripper = rig
     assert np.isclose(gripper.width, gripper.stroke, atol=1e-3)

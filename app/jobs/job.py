@@ -33,7 +33,7 @@ from app.jobs.context import JobContext, Predictor
 from app.jobs.held_place import look_and_place
 from app.jobs.record import STAGES, GraspMissed, JobFailed, JobHooks, JobResult, check_held, ur
 from app.jobs.settings import JOB_IMITATION, JobConfig, looks_again
-from app.motion.executor import OBJECT, FingerWidths, Planner, execute, reverse
+from app.motion.executor import OBJECT, ExecutionError, FingerWidths, Planner, execute, reverse
 from app.motion.ik import reach_failure
 from app.motion.scene import PlanningScene
 from app.nift.imitate import use_threads
@@ -58,6 +58,7 @@ RELEASE_FREED = 0.010  # m beyond the held width: fingers that opened this far h
 RELEASE_BACK_OFF = 0.002  # m back along the approach per try when the fingers jam on the release
 RELEASE_TRIES = 3
 RELEASE_SPEED, RELEASE_ACCELERATION = 0.02, 0.5  # m/s, m/s^2 of those few millimetres
+APPROACH_BACK_OFF_SPEED = 0.05  # m/s back up the approach line after a contact stopped it
 
 
 def run_job(t: Task, arm: Arm, gripper: Gripper, camera: DepthCamera, T_base_cam: np.ndarray,
@@ -116,7 +117,7 @@ def _run(job: JobContext) -> None:
             if attempt == job.config.attempts:
                 raise JobFailed(f"{miss} (attempt {attempt} of {attempt})") from None
             _recover(job, planner, pick)
-            options = [c for c in options if c.grasp_rank != chosen.grasp_rank]
+            options = [c for c in options if c.grasp_rank != chosen.grasp_rank] or None  # none left: imitate again
             continue
         except JobFailed as failed:  # the attempt ends the job: its record says how
             job.result.attempts.append({"attempt": attempt, **describe(chosen, str(failed))})
@@ -194,7 +195,7 @@ def _pick(job: JobContext, plan) -> None:
     with job.stage("approach"):
         job.gripper.open(width=plan.widths.approach if plan.widths else None)
         execute(job.arm, plan.segment("to pre-grasp"), tolerance)
-        execute(job.arm, plan.segment("approach"), tolerance)
+        _guarded_approach(job, plan.segment("approach"))
     with job.stage("grasp"):
         if not job.gripper.close(job.config.grasp_force):
             raise GraspMissed("grasp missed: the gripper closed on nothing")
@@ -202,6 +203,32 @@ def _pick(job: JobContext, plan) -> None:
     with job.stage("lift"):
         execute(job.arm, plan.segment("lift"), tolerance)
         check_held(job.gripper, "lift")
+
+
+def _guarded_approach(job: JobContext, approach) -> None:
+    """The approach line under contact detection: fingers that meet the object (a finger on a mug's
+    rim instead of beside it) stop the arm at rest, it backs off to the pre-grasp and the attempt
+    is a miss (GraspMissed: the next candidate is tried), rather than pressing on into a protective stop."""
+    job.arm.startContactDetection()
+    try:
+        execute(job.arm, approach, job.config.executor.end_tolerance)
+    except ExecutionError as exc:
+        if not job.arm.readContactDetection():
+            raise
+        met = _approach_progress(job, approach)
+        job.arm.stopContactDetection()
+        if not job.arm.moveL(job.arm.getForwardKinematics(approach.q[0]), APPROACH_BACK_OFF_SPEED):
+            raise JobFailed(f"approach: backing off after a contact stopped: {job.arm.getLastError()}") from None
+        raise GraspMissed(f"approach: the tool met something {1000 * met:.0f} mm before the grasp "
+                          f"({exc}); backed off to the pre-grasp") from None
+    finally:
+        job.arm.stopContactDetection()
+
+
+def _approach_progress(job: JobContext, approach) -> float:
+    """How far (m) the TCP still was from the end of the approach line."""
+    end = job.kin.fk(approach.end)[:3, 3]
+    return float(np.linalg.norm(job.kin.fk(job.arm.getActualQ())[:3, 3] - end))
 
 
 def _carry(job: JobContext, plan) -> None:

@@ -209,6 +209,18 @@ class NetArm(_NetDevice, Arm):
     def unlockProtectiveStop(self) -> None:
         self._call("unlockProtectiveStop")
 
+    def getActualTCPForce(self) -> np.ndarray:
+        return np.asarray(self._call("getActualTCPForce"), float)
+
+    def startContactDetection(self) -> bool:
+        return bool(self._call("startContactDetection"))
+
+    def readContactDetection(self) -> bool:
+        return bool(self._call("readContactDetection"))
+
+    def stopContactDetection(self) -> bool:
+        return bool(self._call("stopContactDetection"))
+
     def teachMode(self) -> bool:
         return bool(self._call("teachMode"))
 

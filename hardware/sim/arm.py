@@ -4,7 +4,9 @@ moveJ: a Ruckig time-optimal, jerk-limited joint motion (state to state - the fr
 its cloud waypoint service), tracked by PyBullet position control at the physics rate.
 moveL: a straight TCP line with a jerk-limited path profile; Pinocchio IK at every control step.
 A protective stop triggers on a tracking error above `tracking_error_limit` or a contact force on
-an arm link above `contact_force_limit`; the arm then holds still until unlocked.
+an arm link above `contact_force_limit`; the arm then holds still until unlocked. With contact
+detection on (ur_rtde's startContactDetection), a motion instead ends at rest, unlocked, once the
+external force on the tool passes `contact_detection_force`.
 """
 from __future__ import annotations
 
@@ -15,6 +17,7 @@ import numpy as np
 from hardware.bullet import p
 from hardware.interfaces import Arm, JointLimits, ProtectiveStopError
 from hardware.motion_profile import ruckig_profile
+from hardware.gripper_geometry import PALM_LINK
 from hardware.robot_description import HOME_Q
 from hardware.se3 import interpolate_pose, line_length, pose_to_ur, ur_to_pose
 from hardware.settings import check_ranges
@@ -34,10 +37,12 @@ class SimArmConfig:
     tracking_error_limit: float = 0.05  # rad, any joint
     contact_force_limit: float = 150.0  # N on any arm link (not the fingers)
     settle_time: float = 0.15  # s of holding the final target after a motion
+    contact_detection_force: float = 30.0  # N of external force on the tool that ends a motion under contact detection
 
     def __post_init__(self) -> None:
         check_ranges(self, (("tracking_error_limit", 0.0, 1.0, "rad", False),
-                            ("contact_force_limit", 0.0, 10_000.0, "N", False), ("settle_time", 0.0, 10.0, "s", True)))
+                            ("contact_force_limit", 0.0, 10_000.0, "N", False), ("settle_time", 0.0, 10.0, "s", True),
+                            ("contact_detection_force", 0.0, 10_000.0, "N", False)))
 
 
 class SimArm(Arm):
@@ -50,6 +55,8 @@ class SimArm(Arm):
         self._last_error = ""
         self._moving = False  # a motion's control loop is running (stopJ from another thread then asks it to stop)
         self._stop_request: float | None = None  # the deceleration stopJ asked for, until the loop has stopped
+        self._detecting = False  # startContactDetection() until stopContactDetection()
+        self._contact_detected = False
         self._teach = False  # freedrive (teachMode): the simulated operator's hand moves the arm (`guide`)
         self.max_tracking_error = 0.0  # rad, largest joint error during the last motion
         k = robot.kinematics
@@ -127,6 +134,36 @@ class SimArm(Arm):
         if q.shape != (6,) or not np.isfinite(q).all() or not self._limits.contains(q):
             raise ValueError(f"guide needs 6 finite joint positions within the limits, got {q}")
         self.robot.reset_arm(q)
+
+    def getActualTCPForce(self) -> np.ndarray:
+        """The wrench on the tool (palm and fingers) from its contacts with other bodies (normal and
+        friction forces), about the TCP, in the base frame: what a wrist force-torque sensor reads with
+        the tool's own weight zeroed (a held object's squeeze cancels between the fingers, its weight does not)."""
+        self.require_connected()
+        robot = self.robot
+        tool = {robot.links[PALM_LINK], *robot.finger_links}
+        p_tcp = robot.kinematics.fk(self.getActualQ())[:3, 3]  # the world is the UR base frame (SimRobot.load)
+        wrench = np.zeros(6)
+        for c in p.getContactPoints(bodyA=robot.body, physicsClientId=robot.client):
+            if c[2] != robot.body and c[3] in tool:
+                # on the tool: the normal on B points from B towards A; the friction directions are A's
+                f = c[9] * np.asarray(c[7]) + c[10] * np.asarray(c[11]) + c[12] * np.asarray(c[13])
+                wrench[:3] += f
+                wrench[3:] += np.cross(np.asarray(c[5]) - p_tcp, f)
+        return wrench
+
+    def startContactDetection(self) -> bool:
+        self.require_connected()
+        self._detecting, self._contact_detected = True, False
+        return True
+
+    def readContactDetection(self) -> bool:
+        return self._contact_detected
+
+    def stopContactDetection(self) -> bool:
+        detected = self._contact_detected
+        self._detecting, self._contact_detected = False, False
+        return detected
 
     # motion ----------------------------------------------------------------------------------
     def moveJ(self, q: np.ndarray, speed: float = 1.05, acceleration: float = 1.4) -> bool:
@@ -238,6 +275,10 @@ class SimArm(Arm):
                 return self._halt(f"protective stop: tracking error {error:.3f} rad")
             if i % 8 == 0 and (force := self._arm_contact_force()) > self.config.contact_force_limit:
                 return self._halt(f"protective stop: {force:.0f} N contact on the arm")
+            if self._detecting and (tool := float(np.linalg.norm(self.getActualTCPForce()[:3]))) > \
+                    self.config.contact_detection_force:
+                self._contact_detected = True
+                return self._halt(f"contact detected: {tool:.0f} N on the tool")
         return True
 
     def _halt(self, reason: str) -> bool:
