@@ -179,9 +179,10 @@ class Arm(Device):
         """External wrench on the tool [Fx, Fy, Fz, Tx, Ty, Tz] (N, N m) in the base frame, about the TCP."""
 
     @abstractmethod
-    def startContactDetection(self) -> bool:
+    def startContactDetection(self, force: float | None = None) -> bool:
         """Until stopContactDetection(): a motion ends early, at rest and without a protective stop, once
-        the tool meets something (the external force on it passes the controller's contact threshold)."""
+        the tool meets something: the external force on it changes, from what it is now, by more than
+        `force` N (None: the controller's own threshold)."""
 
     @abstractmethod
     def readContactDetection(self) -> bool:

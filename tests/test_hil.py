@@ -158,6 +158,21 @@ def test_a_protective_stop_reaches_the_client_as_the_same_error(arm):
     assert arm.moveJ(HOME_Q, speed=1.0, acceleration=4.0)
 
 
+def test_contact_detection_over_the_network_stops_at_the_table_without_a_protective_stop(arm):
+    """The same motion into the table as above, under contact detection: a contact, not a stop;
+    a threshold that is no force is refused by name."""
+    into_table = np.array(HOME_Q) + [0.0, 1.3, 0.0, 0.0, 0.0, 0.0]
+    with pytest.raises(ValueError, match="contact detection force"):
+        arm.startContactDetection(-5.0)
+    assert arm.startContactDetection(30.0)
+    assert arm.moveJ(into_table, speed=1.0, acceleration=4.0) is False
+    assert arm.readContactDetection() and not arm.isProtectiveStopped()
+    assert "contact detected" in arm.getLastError()
+    assert np.linalg.norm(arm.getActualTCPForce()[:3]) > 0.0  # the fingers still rest on the table
+    assert arm.stopContactDetection()
+    assert arm.moveJ(HOME_Q, speed=1.0, acceleration=4.0)
+
+
 def test_the_gripper_is_served_as_well(server):
     address, token, _ = server
     g = NetGripper(NetDeviceConfig(address=address, token=token))

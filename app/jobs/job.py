@@ -209,7 +209,7 @@ def _guarded_approach(job: JobContext, approach) -> None:
     """The approach line under contact detection: fingers that meet the object (a finger on a mug's
     rim instead of beside it) stop the arm at rest, it backs off to the pre-grasp and the attempt
     is a miss (GraspMissed: the next candidate is tried), rather than pressing on into a protective stop."""
-    job.arm.startContactDetection()
+    job.arm.startContactDetection(job.config.approach_contact_force)
     try:
         execute(job.arm, approach, job.config.executor.end_tolerance)
     except ExecutionError as exc:

@@ -13,6 +13,7 @@ REACH = 1.5  # m: a TCP pose farther than this from the base is no UR5 pose
 MAX_POINTS = 100_000  # trajectory samples
 MAX_SPEED = 10.0  # rad/s or m/s, an upper bound on any speed argument
 MAX_ACCELERATION = 100.0
+MAX_FORCE = 1000.0  # N, an upper bound on a contact detection threshold
 
 
 def vector(value: Any, n: int, what: str) -> np.ndarray:

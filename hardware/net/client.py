@@ -212,8 +212,8 @@ class NetArm(_NetDevice, Arm):
     def getActualTCPForce(self) -> np.ndarray:
         return np.asarray(self._call("getActualTCPForce"), float)
 
-    def startContactDetection(self) -> bool:
-        return bool(self._call("startContactDetection"))
+    def startContactDetection(self, force: float | None = None) -> bool:
+        return bool(self._call("startContactDetection", None if force is None else float(force)))
 
     def readContactDetection(self) -> bool:
         return bool(self._call("readContactDetection"))

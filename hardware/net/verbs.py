@@ -73,7 +73,8 @@ def arm_verbs(arm: Arm) -> dict[str, Verb]:
         "unlockProtectiveStop": Verb(lambda a, _: a.unlockProtectiveStop(), "command"),
         "getActualTCPForce": Verb(lambda a, _: a.getActualTCPForce()),
         "readContactDetection": Verb(lambda a, _: a.readContactDetection()),
-        "startContactDetection": Verb(lambda a, _: a.startContactDetection(), "command"),
+        "startContactDetection": Verb(lambda a, x: a.startContactDetection(
+            checks.optional_number(arg(x, 0), "contact detection force", 0.0, checks.MAX_FORCE)), "command", 1),
         "stopContactDetection": Verb(lambda a, _: a.stopContactDetection(), "command"),
         "isTeachMode": Verb(lambda a, _: a.isTeachMode()),
         "teachMode": Verb(lambda a, _: a.teachMode(), "command"),

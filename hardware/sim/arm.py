@@ -37,12 +37,15 @@ class SimArmConfig:
     tracking_error_limit: float = 0.05  # rad, any joint
     contact_force_limit: float = 150.0  # N on any arm link (not the fingers)
     settle_time: float = 0.15  # s of holding the final target after a motion
-    contact_detection_force: float = 30.0  # N of external force on the tool that ends a motion under contact detection
+    contact_detection_force: float = 30.0  # N: by default, a change of the tool's external force this large, from
+    # when contact detection started (the sensor zeroed there, as zeroFtSensor does), ends a motion under contact detection
+    contact_detection_time: float = 0.02  # s the change must last (a filtered sensor: Bullet's grip contacts flicker)
 
     def __post_init__(self) -> None:
         check_ranges(self, (("tracking_error_limit", 0.0, 1.0, "rad", False),
                             ("contact_force_limit", 0.0, 10_000.0, "N", False), ("settle_time", 0.0, 10.0, "s", True),
-                            ("contact_detection_force", 0.0, 10_000.0, "N", False)))
+                            ("contact_detection_force", 0.0, 10_000.0, "N", False),
+                            ("contact_detection_time", 0.0, 1.0, "s", True)))
 
 
 class SimArm(Arm):
@@ -57,8 +60,14 @@ class SimArm(Arm):
         self._stop_request: float | None = None  # the deceleration stopJ asked for, until the loop has stopped
         self._detecting = False  # startContactDetection() until stopContactDetection()
         self._contact_detected = False
+        self._force_zero = np.zeros(3)  # N: the tool's external force when contact detection started
+        self._detection_force = self.config.contact_detection_force  # N of change that counts as a contact
+        self._contact_steps = 0  # physics steps the force has been off its zero by more than the threshold
         self._teach = False  # freedrive (teachMode): the simulated operator's hand moves the arm (`guide`)
         self.max_tracking_error = 0.0  # rad, largest joint error during the last motion
+        self.max_force_change = 0.0  # N, largest change of the tool's force since contact detection started,
+        # held for `contact_detection_time` (what a threshold that large would have stopped on)
+        self._recent_changes: list[float] = []
         k = robot.kinematics
         self._limits = JointLimits(k.lower.copy(), k.upper.copy(), k.velocity_limit.copy(),
                                    JOINT_ACCELERATION_LIMIT.copy(), JOINT_JERK_LIMIT.copy())
@@ -152,9 +161,14 @@ class SimArm(Arm):
                 wrench[3:] += np.cross(np.asarray(c[5]) - p_tcp, f)
         return wrench
 
-    def startContactDetection(self) -> bool:
+    def startContactDetection(self, force: float | None = None) -> bool:
         self.require_connected()
-        self._detecting, self._contact_detected = True, False
+        if force is not None and not (np.isfinite(force) and force > 0):
+            raise ValueError(f"contact detection force must be a positive number of N, got {force!r}")
+        self._detection_force = self.config.contact_detection_force if force is None else float(force)
+        self._detecting, self._contact_detected, self._contact_steps = True, False, 0
+        self._force_zero = self.getActualTCPForce()[:3]
+        self.max_force_change, self._recent_changes = 0.0, []
         return True
 
     def readContactDetection(self) -> bool:
@@ -275,11 +289,22 @@ class SimArm(Arm):
                 return self._halt(f"protective stop: tracking error {error:.3f} rad")
             if i % 8 == 0 and (force := self._arm_contact_force()) > self.config.contact_force_limit:
                 return self._halt(f"protective stop: {force:.0f} N contact on the arm")
-            if self._detecting and (tool := float(np.linalg.norm(self.getActualTCPForce()[:3]))) > \
-                    self.config.contact_detection_force:
+            if self._detecting and (change := self._force_change()) is not None:
                 self._contact_detected = True
-                return self._halt(f"contact detected: {tool:.0f} N on the tool")
+                return self._halt(f"contact detected: the force on the tool changed by {change:.0f} N")
         return True
+
+    def _force_change(self) -> float | None:
+        """The change (N) of the tool's force since contact detection started, once it has stayed above
+        the threshold for `contact_detection_time`; None before."""
+        change = float(np.linalg.norm(self.getActualTCPForce()[:3] - self._force_zero))
+        dt = self.robot.world.config.time_step
+        window = max(1, round(self.config.contact_detection_time / dt))
+        self._recent_changes = (self._recent_changes + [change])[-window:]
+        if len(self._recent_changes) == window:
+            self.max_force_change = max(self.max_force_change, min(self._recent_changes))
+        self._contact_steps = self._contact_steps + 1 if change > self._detection_force else 0
+        return change if self._contact_steps >= window else None
 
     def _halt(self, reason: str) -> bool:
         self._last_error = reason
