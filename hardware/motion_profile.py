@@ -6,17 +6,21 @@ in the hardware layer with no import of the application.
 from __future__ import annotations
 
 import numpy as np
-from ruckig import InputParameter, Result, Ruckig, Trajectory
+from ruckig import InputParameter, Result, Ruckig, Synchronization, Trajectory
 
 
 def ruckig_profile(q0: np.ndarray, q1: np.ndarray, v_max: np.ndarray, a_max: np.ndarray,
-                   j_max: np.ndarray) -> Trajectory:
-    """Time-optimal jerk-limited rest-to-rest trajectory from q0 to q1 (Ruckig, offline)."""
+                   j_max: np.ndarray, straight: bool = False) -> Trajectory:
+    """Time-optimal jerk-limited rest-to-rest trajectory from q0 to q1 (Ruckig, offline); `straight`:
+    phase-synchronised, every joint on the same profile scaled, so the path is the straight joint-space
+    segment q0 -> q1 (a UR's moveJ; what a planner checked between its waypoints)."""
     dof = len(q0)
     inp = InputParameter(dof)
     inp.current_position, inp.current_velocity, inp.current_acceleration = list(q0), [0.0] * dof, [0.0] * dof
     inp.target_position, inp.target_velocity, inp.target_acceleration = list(q1), [0.0] * dof, [0.0] * dof
     inp.max_velocity, inp.max_acceleration, inp.max_jerk = list(v_max), list(a_max), list(j_max)
+    if straight:
+        inp.synchronization = Synchronization.Phase
     traj = Trajectory(dof)
     result = Ruckig(dof).calculate(inp, traj)
     if result not in (Result.Working, Result.Finished):

@@ -111,6 +111,18 @@ def test_chained_ruckig_segments_respect_limits_and_rest_at_waypoints(limits):
         assert np.abs(traj.q[i] - w).max() < 1e-9 and np.abs(traj.qd[i]).max() < 1e-9
 
 
+def test_a_timed_transit_follows_the_straight_joint_segments_the_planner_checked(limits):
+    """Between two waypoints every joint runs the same profile scaled (phase synchronisation, a UR's
+    moveJ): each sample lies on the segment, so the states a sampling planner checked are the path."""
+    rng = np.random.default_rng(2)
+    waypoints = [HOME_Q + rng.uniform(-1.0, 1.0, 6) * [1.0, 0.3, 0.5, 1.0, 0.2, 2.0] for _ in range(3)]
+    traj = through_waypoints(waypoints, limits)
+    middle = int(np.argmin(np.abs(traj.q - waypoints[1]).max(axis=1)))  # where the chain rests at the waypoint
+    for (a, b), q in zip(zip(waypoints[:-1], waypoints[1:]), (traj.q[: middle + 1], traj.q[middle:])):
+        s = (q - a) @ (b - a) / ((b - a) @ (b - a))  # (T,) how far along the segment
+        assert len(q) > 20 and np.abs(a + s[:, None] * (b - a) - q).max() < 1e-6
+
+
 def test_cartesian_approach_stays_on_the_straight_line(kin, limits, scene):
     T_grasp = make_pose(rotvec_to_matrix([np.pi, 0, 0]), [0.5, 0.05, 0.12])
     q_grasp = solve(kin, T_grasp, HOME_Q, scene)

@@ -48,7 +48,7 @@ def joint_segment(q0: np.ndarray, q1: np.ndarray, limits: JointLimits, speed: fl
     """One rest-to-rest joint motion, at most `speed` rad/s and `acceleration` rad/s^2 on any joint
     (ur_rtde's moveJ defaults) and never beyond the limits."""
     profile = ruckig_profile(np.asarray(q0, float), np.asarray(q1, float), np.minimum(speed, limits.velocity),
-                             np.minimum(acceleration, limits.acceleration), limits.jerk)
+                             np.minimum(acceleration, limits.acceleration), limits.jerk, straight=True)
     return JointTrajectory(*sample_profile(profile), label=label)
 
 
