@@ -51,6 +51,16 @@ def test_teacher_job_succeeds_end_to_end(name, pose, seed, tmp_path):
 
 
 @pytest.mark.slow
+def test_a_pre_place_where_the_held_hull_meets_the_rack_moves_farther_out_along_the_peg():
+    """The oracle's lying mug 33: at the pre-place 10 cm out along the place line the hull of the held
+    cloud (which fills the handle) meets the rack, so no carry could end there; 20 cm out it is clear,
+    and the mug hangs."""
+    result, q, width, stopped = _run(CellConfig(), JobSpec(task("mug"), seed=33, pose="resting"), "teacher")
+    assert result.success, result.reason
+    assert result.plan["trajectory_seconds"] > 0 and not stopped
+
+
+@pytest.mark.slow
 @pytest.mark.parametrize("seed", [3, 14])
 def test_nift_hangs_a_mug_end_to_end_by_the_hole_it_sees(seed):
     """NIFT's own job from the one Kinect (the README's first command): the mug hangs on the rack, by

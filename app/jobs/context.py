@@ -77,5 +77,5 @@ class JobContext:
             if c.place_rank < 0:
                 return fixture_approach(self.T_base_fixture, self.t.fixture)
             return peg_line_direction(transform_points(c.motion, cloud), self.T_base_fixture, self.t.fixture,
-                                      self.config.executor.place_distance)
+                                      self.config.executor.place_distances[0])
         return direction

@@ -45,7 +45,8 @@ class ExecutorConfig:
     shorter: tuple[float, ...] = (0.6, 0.4)  # fractions of the approach and the lift tried when a line fails
     approach_cone: float = 15.0  # degrees off the axis of the approaches tried after those
     lift_height: float = 0.12  # m, straight up after the grasp
-    place_distance: float = 0.10  # m, pre-place back along the fixture's approach direction
+    place_distances: tuple[float, ...] = (0.10, 0.20)  # m, pre-place back along the fixture's approach direction:
+    # the first where the held object's hull is clear of the cell (the hull fills a mug's handle, which hangs on the peg)
     peg_clearance: float = 0.012  # m the object is placed above its hang on a peg, and dropped (app.motion.place_line):
     # at 6 mm a mug turned 1-6 degrees in the grasp on the way rested its handle on the peg and fell (5 of 50)
     peg_short: float = 0.0  # m the object is placed short of its hang, out along the peg
@@ -205,7 +206,6 @@ class Planner:
         """carry (from q_from, the object held), place, retreat, clear, home."""
         c = self.config
         held, released = widths.held, widths.released
-        T_pre_place = make_pose(T_place[:3, :3], T_place[:3, 3] + c.place_distance * np.asarray(place_direction))
         backs = line_offsets(np.array([0.0, 0.0, -1.0]), c.retreat_distance, c)  # in the TCP frame at the place
         retreats = [T_place @ make_pose(t=back) for back in backs]
 
@@ -215,7 +215,7 @@ class Planner:
             T_clear[2, 3] += c.lift_height
             return retreat, self.line(retreat.end, T_clear, "clear", (OBJECT,))
 
-        def place_lines(q: np.ndarray):
+        def place_lines(q: np.ndarray, T_pre_place: np.ndarray):
             with self.scene.fingers(held):
                 place = reverse(self.line(q, T_pre_place, "place", (OBJECT,)))
             with self.scene.fingers(released):  # a retreat that leaves no way up is no retreat
@@ -223,7 +223,12 @@ class Planner:
 
         with self.scene.fingers(held):
             at_place = solutions(self.kin, T_place, q_from, self.scene, c.ik, (OBJECT,), "place")
-        place, retreat, clear = self._first(at_place, place_lines)
+        for distance in c.place_distances:  # farther out when the held hull meets the fixture at the pre-place
+            T_pre_place = make_pose(T_place[:3, :3], T_place[:3, 3] + distance * np.asarray(place_direction))
+            place, retreat, clear = self._first(at_place, lambda q: place_lines(q, T_pre_place))
+            with self.scene.holding(OBJECT, T_grasp), self.scene.fingers(held):
+                if not self.scene.collisions(place.q[0], (OBJECT,)):
+                    break
         with self.scene.holding(OBJECT, T_grasp), self.scene.fingers(held):  # the carried object must clear the cell too
             carry = self.transit(q_from, place.q[0], "carry", ignore=(OBJECT,))
         with self.scene.fingers(released):

@@ -1,7 +1,7 @@
 """The line onto a peg, chosen so the held object's points clear the fixture (our addition).
 
 A mug hangs by its handle on the rack's peg, which rises at 45 degrees; the place line comes onto
-the hang from `place_distance` out along the peg. The planning scene cannot check the carried
+the hang from `place_distances[0]` out along the peg. The planning scene cannot check the carried
 object on that line - the hull of its cloud fills the handle, so it always overlaps the peg. The
 oracle's hangs have the handle resting in the peg (4-7 of the mesh's vertices inside it); slid
 along the peg so, the handle dragged on it and turned the mug 24-26 degrees in the grasp (seeds 5
