@@ -499,3 +499,24 @@ def test_a_segment_starts_where_a_sagging_arm_stands_and_a_far_one_is_still_refu
     assert np.allclose(arm.ran[0], sagged) and np.allclose(arm.ran[1:], path[1:]) and np.allclose(arm.q, path[-1])
     with pytest.raises(ValueError, match="does not start"):
         execute(_DriverArm(sagged * 2.5), traj, 0.02)
+
+
+def test_an_arm_pushed_off_a_trajectorys_start_is_brought_back_and_one_close_by_is_left_alone():
+    from app.motion.executor import JointTrajectory, back_to_start
+    from hardware.sim.arm import SimArm, SimArmConfig
+    from hardware.sim.robot import SimRobot
+    from hardware.sim.world import SimWorld
+
+    world = SimWorld()
+    arm = SimArm(SimArmConfig(), SimRobot(world))
+    with world, arm:
+        start = np.array(HOME_Q)
+        traj = JointTrajectory(np.array([0.0, 1.0]), np.array([start, start + 0.1]), np.zeros((2, 6)), "retreat")
+        pushed = start + [0.0, 0.0, 0.0, 0.07, 0.0, 0.0]  # the wrist, as a gripper letting go pushed it
+        assert arm.moveJ(pushed)
+        back_to_start(arm, traj, tolerance=0.02)
+        assert np.abs(arm.getActualQ() - start).max() < 2e-3
+        near = start + [0.0, 0.0, 0.0, 0.015, 0.0, 0.0]
+        assert arm.moveJ(near)
+        back_to_start(arm, traj, tolerance=0.02)  # within the tolerance `execute` starts from where it stands
+        assert np.abs(arm.getActualQ() - near).max() < 2e-3

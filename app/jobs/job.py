@@ -33,7 +33,7 @@ from app.jobs.context import JobContext, Predictor
 from app.jobs.held_place import look_and_place
 from app.jobs.record import STAGES, GraspMissed, JobFailed, JobHooks, JobResult, check_held, ur
 from app.jobs.settings import JOB_IMITATION, JobConfig, looks_again
-from app.motion.executor import OBJECT, ExecutionError, FingerWidths, Planner, execute, reverse
+from app.motion.executor import OBJECT, ExecutionError, FingerWidths, Planner, back_to_start, execute, reverse
 from app.motion.ik import reach_failure
 from app.motion.scene import PlanningScene
 from app.nift.imitate import use_threads
@@ -262,6 +262,7 @@ def _place(job: JobContext, plan, sent: np.ndarray) -> None:
         held = job.gripper.width
         _let_go(job, min(job.gripper.stroke, held + job.config.release_clearance), held)
     with job.stage("retreat"):
+        back_to_start(job.arm, plan.segment("retreat"), tolerance)  # letting go may have pushed the wrist
         for name in ("retreat", "clear", "home"):
             execute(job.arm, plan.segment(name), tolerance)
     with job.stage("verify"):

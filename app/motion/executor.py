@@ -291,6 +291,14 @@ def reverse(traj: JointTrajectory) -> JointTrajectory:
 START_GAP = 0.01  # rad: a trajectory the arm's drivers run must start this close to its joints
 
 
+def back_to_start(arm: Arm, traj: JointTrajectory, tolerance: float = 0.02, speed: float = 0.5) -> None:
+    """Bring an arm that stands farther than `tolerance` from a trajectory's start back there with a
+    short moveJ (the gripper opening on a held bottle pushed the wrist 0.07 rad off the planned place);
+    ExecutionError when that motion stops. Closer than `tolerance`, `execute` starts from where it stands."""
+    if float(np.abs(arm.getActualQ() - traj.q[0]).max()) > tolerance and not arm.moveJ(traj.q[0], speed, 2 * speed):
+        raise ExecutionError(f"{traj.label}: returning to its start stopped: {arm.getLastError() or 'motion stopped'}")
+
+
 def execute(arm: Arm, traj: JointTrajectory, tolerance: float = 0.02) -> None:
     """Run a planned trajectory on the arm; ExecutionError on a stop or if it ends off target. An arm
     that the last segment left within `tolerance` of this one's start but not within START_GAP (the
