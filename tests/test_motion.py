@@ -111,12 +111,12 @@ def test_chained_ruckig_segments_respect_limits_and_rest_at_waypoints(limits):
         assert np.abs(traj.q[i] - w).max() < 1e-9 and np.abs(traj.qd[i]).max() < 1e-9
 
 
-def test_a_timed_transit_follows_the_straight_joint_segments_the_planner_checked(limits):
-    """Between two waypoints every joint runs the same profile scaled (phase synchronisation, a UR's
-    moveJ): each sample lies on the segment, so the states a sampling planner checked are the path."""
+def test_a_straight_timed_transit_follows_the_joint_segments_the_planner_checked(limits):
+    """Timed straight, between two waypoints every joint runs the same profile scaled (phase
+    synchronisation, a UR's moveJ): each sample lies on the segment the sampling planner checked."""
     rng = np.random.default_rng(2)
     waypoints = [HOME_Q + rng.uniform(-1.0, 1.0, 6) * [1.0, 0.3, 0.5, 1.0, 0.2, 2.0] for _ in range(3)]
-    traj = through_waypoints(waypoints, limits)
+    traj = through_waypoints(waypoints, limits, straight=True)
     middle = int(np.argmin(np.abs(traj.q - waypoints[1]).max(axis=1)))  # where the chain rests at the waypoint
     for (a, b), q in zip(zip(waypoints[:-1], waypoints[1:]), (traj.q[: middle + 1], traj.q[middle:])):
         s = (q - a) @ (b - a) / ((b - a) @ (b - a))  # (T,) how far along the segment
@@ -520,3 +520,31 @@ def test_an_arm_pushed_off_a_trajectorys_start_is_brought_back_and_one_close_by_
         assert arm.moveJ(near)
         back_to_start(arm, traj, tolerance=0.02)  # within the tolerance `execute` starts from where it stands
         assert np.abs(arm.getActualQ() - near).max() < 2e-3
+
+
+def test_a_sampled_path_whose_default_timing_leaves_its_segments_is_timed_straight(kin, limits, scene, monkeypatch):
+    """A planner whose every state off the sampled segments is 'in collision' (what a narrow passage
+    is): the direct move and the default timing of the sampled path fail, the straight timing of the
+    same waypoints is taken."""
+    import app.motion.executor as ex
+
+    q0 = np.array(HOME_Q)
+    via = q0 + [0.8, -0.3, 0.5, 0.9, 0.2, 1.5]
+    q1 = q0 + [1.2, 0.1, 0.2, 1.4, -0.3, 0.6]
+    waypoints = np.array([q0, via, q1])
+
+    def off_the_segments(traj, ignore):
+        middle = int(np.argmin(np.abs(traj.q - via).max(axis=1)))
+        if np.abs(traj.q[middle] - via).max() > 1e-9:
+            return ["direct-off"]
+        for (a, b), q in zip(((q0, via), (via, q1)), (traj.q[: middle + 1], traj.q[middle:])):
+            s = (q - a) @ (b - a) / ((b - a) @ (b - a))
+            if np.abs(a + s[:, None] * (b - a) - q).max() > 1e-6:
+                return ["curved-off"]
+        return []
+
+    monkeypatch.setattr(ex, "plan_joint_path", lambda *args, **kw: waypoints)
+    planner = ex.Planner(kin, limits, scene)
+    monkeypatch.setattr(planner, "_collisions", off_the_segments)
+    traj = planner.transit(q0, q1, "carry")
+    assert off_the_segments(traj, ()) == [] and np.allclose(traj.end, q1)

@@ -121,15 +121,16 @@ class Planner:
         except NoPath as exc:
             raise NoIKSolution(f"{label}: {exc} (the direct one hits {', '.join(hits[:3])})") from None
         for path in (waypoints, densify(waypoints, self.config.sampling.max_step / 2)):
-            traj = self._timed(path, label)
-            if not self._collisions(traj, ignore):
-                return traj
+            for straight in (False, True):  # then on the very segments the planner checked (docs/decisions.md)
+                traj = self._timed(path, label, straight)
+                if not self._collisions(traj, ignore):
+                    return traj
         raise NoIKSolution(f"{label}: the sampled joint path collides once timed ({', '.join(hits[:3])} on the direct one)")
 
-    def _timed(self, waypoints: np.ndarray, label: str) -> JointTrajectory:
-        """Ruckig rest-to-rest segments through joint waypoints (K, 6)."""
+    def _timed(self, waypoints: np.ndarray, label: str, straight: bool = False) -> JointTrajectory:
+        """Ruckig rest-to-rest segments through joint waypoints (K, 6); `straight`: phase-synchronised."""
         return through_waypoints(list(waypoints), self.limits, self.config.joint_speed, self.config.joint_acceleration,
-                                 label)
+                                 label, straight)
 
     def line(self, q0: np.ndarray, T1: np.ndarray, label: str, ignore: tuple[str, ...] = ()) -> JointTrajectory:
         """A straight TCP line from FK(q0) to T1, timed under the joint limits."""

@@ -44,20 +44,23 @@ def sample_profile(profile: Trajectory, period: float = SAMPLE_PERIOD) -> tuple[
 
 
 def joint_segment(q0: np.ndarray, q1: np.ndarray, limits: JointLimits, speed: float = 1.05,
-                  acceleration: float = 1.4, label: str = "") -> JointTrajectory:
+                  acceleration: float = 1.4, label: str = "", straight: bool = False) -> JointTrajectory:
     """One rest-to-rest joint motion, at most `speed` rad/s and `acceleration` rad/s^2 on any joint
-    (ur_rtde's moveJ defaults) and never beyond the limits."""
+    (ur_rtde's moveJ defaults) and never beyond the limits; `straight`: on the joint-space segment
+    q0 -> q1 (`hardware.motion_profile.ruckig_profile`)."""
     profile = ruckig_profile(np.asarray(q0, float), np.asarray(q1, float), np.minimum(speed, limits.velocity),
-                             np.minimum(acceleration, limits.acceleration), limits.jerk, straight=True)
+                             np.minimum(acceleration, limits.acceleration), limits.jerk, straight)
     return JointTrajectory(*sample_profile(profile), label=label)
 
 
 def through_waypoints(waypoints: list[np.ndarray], limits: JointLimits, speed: float = 1.05,
-                      acceleration: float = 1.4, label: str = "") -> JointTrajectory:
-    """Chain rest-to-rest segments through joint waypoints into one trajectory."""
+                      acceleration: float = 1.4, label: str = "", straight: bool = False) -> JointTrajectory:
+    """Chain rest-to-rest segments through joint waypoints into one trajectory (`straight`: each
+    on its joint-space segment)."""
     if len(waypoints) < 2:
         raise ValueError("a trajectory needs at least two waypoints")
-    parts = [joint_segment(a, b, limits, speed, acceleration) for a, b in zip(waypoints[:-1], waypoints[1:])]
+    parts = [joint_segment(a, b, limits, speed, acceleration, straight=straight)
+             for a, b in zip(waypoints[:-1], waypoints[1:])]
     return concatenate(parts, label)
 
 
