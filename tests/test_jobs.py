@@ -387,3 +387,52 @@ def test_a_seed_gives_the_same_job_twice_in_one_process():
     NIFT imitated on them followed it: seed 7 hung its mug, then, run again, jammed its release."""
     first, again = _series([7, 7])
     assert again == first  # the poses, the plan, the attempts, the second look, what the camera saw
+
+
+def _down_line(arm, z_end: float, speed: float = 0.05):
+    """A timed joint trajectory taking the TCP straight down from where it is to height z_end."""
+    from app.motion.trajectory import JointTrajectory
+    from hardware.se3 import ur_to_pose
+
+    k = arm.robot.kinematics
+    T0 = ur_to_pose(arm.getActualTCPPose())
+    n = 60
+    qs, q = [], arm.getActualQ()
+    for s in np.linspace(0.0, 1.0, n):
+        T = T0.copy()
+        T[2, 3] += s * (z_end - T0[2, 3])
+        q = k.ik(T, q)
+        qs.append(q)
+    times = np.linspace(0.0, abs(z_end - T0[2, 3]) / speed, n)
+    return JointTrajectory(times, np.array(qs), np.gradient(np.array(qs), times, axis=0), "approach")
+
+
+def test_an_approach_that_meets_something_within_7_mm_of_its_end_closes_there_and_one_farther_backs_off():
+    """Straight down onto the bare table: the fingers touch it at some height; a line ending 4 mm past
+    that has arrived (the job closes there and says so), one ending 30 mm past it backs off to its
+    start and is a miss."""
+    from types import SimpleNamespace
+
+    from app.jobs.job import APPROACH_ARRIVED, GraspMissed, JobResult, _guarded_approach
+    from hardware.sim.arm import SimArm, SimArmConfig
+    from hardware.sim.robot import SimRobot
+    from hardware.sim.world import SimWorld
+    from hardware.se3 import ur_to_pose
+
+    world = SimWorld()
+    arm = SimArm(SimArmConfig(), SimRobot(world))
+    with world, arm:
+        job = SimpleNamespace(arm=arm, config=JobConfig(), kin=arm.robot.kinematics, result=JobResult("bowl", "nift"))
+        start = arm.getActualQ()
+        arm.startContactDetection(30.0)
+        assert not arm.moveL(arm.getActualTCPPose() - [0, 0, 1.0, 0, 0, 0], 0.05)
+        arm.stopContactDetection()
+        z_touch = arm.getActualTCPPose()[2]
+        assert arm.moveJ(start)
+        short = _guarded_approach(job, _down_line(arm, z_touch - 0.004))
+        assert 0.0 < short <= APPROACH_ARRIVED and "closed there" in job.result.notes[-1]
+        assert not arm.isProtectiveStopped()
+        assert arm.moveJ(start)
+        with pytest.raises(GraspMissed, match="backed off to the pre-grasp"):
+            _guarded_approach(job, _down_line(arm, z_touch - 0.03))
+        assert np.abs(ur_to_pose(arm.getActualTCPPose())[:3, 3] - arm.robot.kinematics.fk(start)[:3, 3]).max() < 0.002
