@@ -120,11 +120,12 @@ class Planner:
             waypoints = plan_joint_path(self.scene, q0, q1, ignore, self.config.sampling)
         except NoPath as exc:
             raise NoIKSolution(f"{label}: {exc} (the direct one hits {', '.join(hits[:3])})") from None
-        for path in (waypoints, densify(waypoints, self.config.sampling.max_step / 2)):
-            for straight in (False, True):  # then on the very segments the planner checked (docs/decisions.md)
-                traj = self._timed(path, label, straight)
-                if not self._collisions(traj, ignore):
-                    return traj
+        dense = densify(waypoints, self.config.sampling.max_step / 2)
+        # last, on the very segments the planner checked (docs/decisions.md)
+        for path, straight in ((waypoints, False), (dense, False), (waypoints, True)):
+            traj = self._timed(path, label, straight)
+            if not self._collisions(traj, ignore):
+                return traj
         raise NoIKSolution(f"{label}: the sampled joint path collides once timed ({', '.join(hits[:3])} on the direct one)")
 
     def _timed(self, waypoints: np.ndarray, label: str, straight: bool = False) -> JointTrajectory:
