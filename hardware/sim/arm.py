@@ -62,7 +62,6 @@ class SimArm(Arm):
         self._contact_detected = False
         self._force_zero = np.zeros(3)  # N: the tool's external force when contact detection started
         self._detection_force = self.config.contact_detection_force  # N of change that counts as a contact
-        self._contact_steps = 0  # physics steps the force has been off its zero by more than the threshold
         self._teach = False  # freedrive (teachMode): the simulated operator's hand moves the arm (`guide`)
         self.max_tracking_error = 0.0  # rad, largest joint error during the last motion
         self.max_force_change = 0.0  # N, largest change of the tool's force since contact detection started,
@@ -166,7 +165,7 @@ class SimArm(Arm):
         if force is not None and not (np.isfinite(force) and force > 0):
             raise ValueError(f"contact detection force must be a positive number of N, got {force!r}")
         self._detection_force = self.config.contact_detection_force if force is None else float(force)
-        self._detecting, self._contact_detected, self._contact_steps = True, False, 0
+        self._detecting, self._contact_detected = True, False
         self._force_zero = self.getActualTCPForce()[:3]
         self.max_force_change, self._recent_changes = 0.0, []
         return True
@@ -301,10 +300,11 @@ class SimArm(Arm):
         dt = self.robot.world.config.time_step
         window = max(1, round(self.config.contact_detection_time / dt))
         self._recent_changes = (self._recent_changes + [change])[-window:]
-        if len(self._recent_changes) == window:
-            self.max_force_change = max(self.max_force_change, min(self._recent_changes))
-        self._contact_steps = self._contact_steps + 1 if change > self._detection_force else 0
-        return change if self._contact_steps >= window else None
+        if len(self._recent_changes) < window:
+            return None
+        held = min(self._recent_changes)  # N the change has stayed above over the window
+        self.max_force_change = max(self.max_force_change, held)
+        return change if held > self._detection_force else None
 
     def _halt(self, reason: str) -> bool:
         self._last_error = reason
