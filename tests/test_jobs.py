@@ -83,31 +83,39 @@ def _sim(spec: JobSpec, job: JobConfig = JobConfig(method="teacher"), config: Ce
             scene.close()
 
 
-def test_a_job_whose_best_candidate_is_unreachable_takes_the_next_one_and_succeeds():
-    """The best-scored grasp lies under the table top; the job must skip it and use the oracle's."""
+def _oracle_after_a_moved_first(name: str, seed: int, moved):
+    """The oracle's job in a fresh cell (true camera pose) whose best candidate is the oracle's grasp
+    moved to `moved(T_base_tcp)`, and the oracle's own grasp second; the result and whether the arm
+    ended in a protective stop."""
     def predictor_of(cell):
-        def with_a_bad_first(obj):
-            oracle = teacher_predictor(cell, obj, task("bottle"))
+        def with_a_moved_first(obj):
+            oracle = teacher_predictor(cell, obj, task(name))
 
             def predict(cloud):
                 pred = oracle(cloud)
                 good = pred.options()[0]
-                bad = replace(good, T_base_tcp=make_pose(good.T_base_tcp[:3, :3], good.T_base_tcp[:3, 3] - [0, 0, 0.30]))
-                pred.candidates = [bad, replace(good, score=0.5, grasp_rank=1)]
+                pred.candidates = [replace(good, T_base_tcp=moved(good.T_base_tcp)),
+                                   replace(good, score=0.5, grasp_rank=1)]
                 return pred
             return predict
-        return with_a_bad_first
+        return with_a_moved_first
 
     config = CellConfig()
     with SimCell(config) as cell:
         scene = PlanningScene(config)
         try:
-            # seed 2: seed 0's bottle is dragged off the shelf on the retreat with the true camera pose
-            # (docs/limits.md), and seed 1's first grasp alone cannot be planned
-            result = run_sim_job(cell, scene, np.array(cell.camera.config.T_base_cam), JobSpec(task("bottle"), seed=2),
+            result = run_sim_job(cell, scene, np.array(cell.camera.config.T_base_cam), JobSpec(task(name), seed=seed),
                                  JobConfig(method="teacher"), predictor_of=predictor_of(cell))
+            return result, cell.arm.isProtectiveStopped()
         finally:
             scene.close()
+
+
+def test_a_job_whose_best_candidate_is_unreachable_takes_the_next_one_and_succeeds():
+    """The best-scored grasp lies under the table top; the job must skip it and use the oracle's."""
+    # seed 2: seed 0's bottle is dragged off the shelf on the retreat with the true camera pose
+    # (docs/limits.md), and seed 1's first grasp alone cannot be planned
+    result, _ = _oracle_after_a_moved_first("bottle", 2, lambda T: make_pose(T[:3, :3], T[:3, 3] - [0, 0, 0.30]))
     assert result.success, result.reason
     first, second = result.candidates
     assert first["outcome"].endswith("(quick test)") and "grasp" in first["outcome"] and "table" in first["outcome"]
@@ -121,29 +129,12 @@ def test_an_approach_that_meets_the_object_stops_backs_off_and_takes_the_next_gr
     """The best grasp is the oracle's moved 3 cm along the fingers' axis: a finger comes down on the
     mug's rim and presses it into the table. Contact detection stops the arm at rest (no protective stop), it backs off, and the
     next candidate (the oracle's own) is grasped and placed; both attempts are recorded."""
-    def predictor_of(cell):
-        def with_a_finger_on_the_rim(obj):
-            oracle = teacher_predictor(cell, obj, task("mug"))
+    def on_the_rim(T: np.ndarray) -> np.ndarray:
+        T = T.copy()
+        T[:3, 3] += shift * T[:3, 1]  # the tool's y: the fingers' axis
+        return T
 
-            def predict(cloud):
-                pred = oracle(cloud)
-                good = pred.options()[0]
-                T = good.T_base_tcp.copy()
-                T[:3, 3] += shift * T[:3, 1]  # the tool's y: the fingers' axis
-                pred.candidates = [replace(good, T_base_tcp=T), replace(good, score=0.5, grasp_rank=1)]
-                return pred
-            return predict
-        return with_a_finger_on_the_rim
-
-    config = CellConfig()
-    with SimCell(config) as cell:
-        scene = PlanningScene(config)
-        try:
-            result = run_sim_job(cell, scene, np.array(cell.camera.config.T_base_cam), JobSpec(task("mug"), seed=0),
-                                 JobConfig(method="teacher"), predictor_of=predictor_of(cell))
-            stopped = cell.arm.isProtectiveStopped()
-        finally:
-            scene.close()
+    result, stopped = _oracle_after_a_moved_first("mug", 0, on_the_rim)
     assert result.success, result.reason
     assert not stopped
     first, second = result.attempts
