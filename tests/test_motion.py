@@ -533,7 +533,7 @@ def test_a_sampled_path_whose_default_timing_leaves_its_segments_is_timed_straig
     q1 = q0 + [1.2, 0.1, 0.2, 1.4, -0.3, 0.6]
     waypoints = np.array([q0, via, q1])
 
-    def off_the_segments(traj, ignore):
+    def off_the_segments(traj, ignore, allowed=None):
         middle = int(np.argmin(np.abs(traj.q - via).max(axis=1)))
         if np.abs(traj.q[middle] - via).max() > 1e-9:
             return ["direct-off"]
@@ -548,3 +548,104 @@ def test_a_sampled_path_whose_default_timing_leaves_its_segments_is_timed_straig
     monkeypatch.setattr(planner, "_collisions", off_the_segments)
     traj = planner.transit(q0, q1, "carry")
     assert off_the_segments(traj, ()) == [] and np.allclose(traj.end, q1)
+
+
+def _side_grasp(kin):
+    """A side grasp as of a bottle at its neck: the approach (tool z) horizontal, the tool's x up, the
+    fingers' axis (tool y) horizontal across the approach; and its IK solution near home."""
+    R = np.column_stack([[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [-1.0, 0.0, 0.0]])  # tool x, y, z in the base frame
+    T = make_pose(R, [0.45, 0.10, 0.30])
+    return T, kin.ik(T, HOME_Q)
+
+
+def test_the_carry_constraint_bounds_the_turn_about_the_fingers_axis_and_no_other(kin):
+    from app.motion.executor import held_without_pivot
+
+    T0, q0 = _side_grasp(kin)
+    turned = lambda rotvec: kin.ik(T0 @ make_pose(rotvec_to_matrix(rotvec)), q0)  # noqa: E731
+    allowed = held_without_pivot(kin, q0, q0, 45.0)
+    for degrees, ok in ((20.0, True), (44.0, True), (-44.0, True), (46.0, False), (90.0, False), (180.0, False)):
+        assert allowed(turned([0.0, np.radians(degrees), 0.0])) is ok, degrees  # about the fingers' axis
+    for degrees in (30.0, 90.0, 180.0):  # about the tool's x, the bottle's own axis: any turn
+        assert allowed(turned([np.radians(degrees), 0.0, 0.0]))
+    for degrees, ok in ((30.0, True), (85.0, True), (180.0, False)):  # about the approach: until it stands on its head
+        assert allowed(turned([0.0, 0.0, np.radians(degrees)])) is ok, degrees
+    q_end = turned([0.0, np.radians(70.0), 0.0])  # an end that needs more is allowed that much
+    wider = held_without_pivot(kin, q0, q_end, 45.0)
+    assert wider(q_end) and wider(turned([0.0, np.radians(65.0), 0.0])) and not wider(turned([0.0, np.radians(80.0), 0.0]))
+
+
+def test_the_sampling_planner_keeps_a_path_constraint_on_every_state(kin, limits, scene):
+    """Two reaches whose direct joint path passes the elbow over 1.2 rad; the constraint forbids that
+    on the middle third of the base's turn: the planner finds a way with the elbow bent less, and the
+    timed transit keeps it at every sample."""
+    from app.motion.executor import Planner
+    from app.motion.sampling import densify, plan_joint_path
+
+    q0, q1, _ = _pillar_between_two_reaches(kin)
+    lo, hi = np.sort([q0[0], q1[0]])
+    third = (hi - lo) / 3
+    elbow = 0.5 * (abs(q0[2]) + min(abs(q0[2]), abs(q1[2])))
+    allowed = lambda q: not (lo + third < q[0] < hi - third and abs(q[2]) > elbow - 0.3)  # noqa: E731
+    assert allowed(q0) and allowed(q1) and not all(allowed(q) for q in densify(np.array([q0, q1]), 0.01))
+    path = plan_joint_path(scene, q0, q1, allowed=allowed)
+    assert all(allowed(q) for q in densify(path, 0.005))
+    traj = Planner(kin, limits, scene).transit(q0, q1, "constrained", allowed=allowed)
+    assert all(allowed(q) for q in traj.q) and np.allclose(traj.q[-1], q1, atol=1e-6)
+
+
+def test_a_carry_that_cannot_keep_the_object_from_pivoting_is_planned_without_the_constraint(kin, limits, scene,
+                                                                                            monkeypatch):
+    import app.motion.executor as executor
+
+    T0, q0 = _side_grasp(kin)
+    q1 = kin.ik(make_pose(t=[0.0, -0.15, 0.0]) @ T0, q0)
+    assert not scene.collisions(q0) and not scene.collisions(q1)
+    planner = executor.Planner(kin, limits, scene, executor.ExecutorConfig(
+        sampling=executor.SamplingConfig(timeout=0.2)))
+    lever = 0.1  # m: a bottle held at its neck
+    traj, kept = planner.carry(q0, q1, lever=lever)
+    assert kept and np.allclose(traj.q[-1], q1, atol=1e-6)
+    ends_only = lambda kin_, a, b, extra: (lambda q: bool(np.allclose(q, a) or np.allclose(q, b)))  # noqa: E731
+    monkeypatch.setattr(executor, "held_without_pivot", ends_only)  # nothing between the ends is allowed
+    with pytest.raises(NoIKSolution, match="constrained"):
+        planner.transit(q0, q1, "carry", allowed=ends_only(kin, q0, q1, 0.0))
+    traj, kept = planner.carry(q0, q1, lever=lever)  # the constraint cannot be kept: planned as any transit
+    assert not kept and np.allclose(traj.q[0], q0) and np.allclose(traj.q[-1], q1, atol=1e-6)
+    assert planner.carry(q0, q1, lever=0.04)[1]  # a mug held at its rim: no constraint to keep
+
+
+def test_the_held_lever_is_the_centroids_distance_from_the_fingers_axis(kin, limits, scene):
+    from app.motion.executor import OBJECT, Planner
+
+    T_grasp, _ = _side_grasp(kin)  # the tool's x up, y (the fingers' axis) along the base's y
+    planner = Planner(kin, limits, scene)
+    assert planner.held_lever(T_grasp) == 0.0  # no cloud of the object: nothing to pivot
+    blob = np.random.default_rng(0).normal(0.0, 0.005, (200, 3))
+    blob -= blob.mean(axis=0)
+    scene.add_cloud(OBJECT, blob + T_grasp[:3, 3] + [0.0, 0.05, -0.11])  # 11 cm below the TCP, 5 cm along y
+    try:
+        assert planner.held_lever(T_grasp) == pytest.approx(0.11, abs=1e-6)  # along the axis does not count
+    finally:
+        scene.remove(OBJECT)
+
+
+@pytest.mark.parametrize("pivots_on", [(True, False), (True, True)])
+def test_a_carry_that_may_pivot_the_object_sends_the_planner_to_the_other_half_turn(kin, limits, scene, monkeypatch,
+                                                                                   pivots_on):
+    """The first half-turn's carry cannot keep the object from pivoting: the other half-turn is planned
+    and taken when its carry can; when neither can, the first is kept, with the note."""
+    from app.motion.executor import CARRY_MAY_PIVOT, HALF_TURN, Planner
+
+    T_grasp = make_pose(rotvec_to_matrix([np.pi, 0, 0]), [0.5, 0.05, 0.15])
+    T_place = make_pose(rotvec_to_matrix([np.pi, 0, 0]), [0.45, -0.15, 0.15])
+    planner = Planner(kin, limits, scene)
+    flips = planner._flips_nearest_first(HOME_Q, T_grasp)
+    carries = iter(pivots_on)
+    carry = Planner.carry
+    monkeypatch.setattr(Planner, "carry", lambda self, *a, **k: (carry(self, *a, **k)[0], not next(carries)))
+    plan = planner.pick_place(HOME_Q, T_grasp, T_place, np.array([0.0, 0.0, 1.0]))
+    taken = flips[1] if pivots_on == (True, False) else flips[0]
+    assert np.allclose(plan.T_base_grasp, T_grasp @ taken) and np.allclose(plan.T_base_place, T_place @ taken)
+    assert (CARRY_MAY_PIVOT in plan.notes) == all(pivots_on)
+    assert any(np.allclose(f, HALF_TURN) for f in flips)

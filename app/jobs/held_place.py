@@ -64,6 +64,7 @@ def look_and_place(job: JobContext, planner: Planner, plan, chosen: Candidate, o
                 look.update({"used": True, "place_rank": c.place_rank, **moved(plan, rest)})
             job.result.look = _with_why(look, views is not None, look_whys)
             job.result.poses["place"] = ur(rest.T_base_place)
+            job.result.notes += rest.notes
             return rest, transform_points(c.motion, seen)
         job.result.look = _with_why(look, views is not None, look_whys)
         raise JobFailed(f"none of {len(tries)} places could be planned for the held grasp; the best: "

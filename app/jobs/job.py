@@ -183,6 +183,7 @@ def _plan(job: JobContext, planner: Planner, options: list, cloud: np.ndarray):
                 raise exc from None
         job.result.candidates += choice.tried
         plan = choice.plan
+        job.result.notes += plan.notes
         job.result.poses["grasp"] = ur(plan.T_base_grasp)
         if plan.T_base_place is not None:  # a pick alone keeps the first look's predicted place in the record
             job.result.poses["place"] = ur(plan.T_base_place)

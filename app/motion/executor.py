@@ -19,6 +19,7 @@ motion would collide follows a path of OMPL's RRT-Connect (`app.motion.sampling`
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -31,10 +32,11 @@ from app.motion.trajectory import JointTrajectory, path_timing, through_waypoint
 from hardware.interfaces import Arm, JointLimits
 from hardware.kinematics import UR5Kinematics
 from hardware.robot_description import HOME_Q
-from hardware.se3 import line_length, make_pose, rotvec_to_matrix
+from hardware.se3 import line_length, make_pose, rotvec_to_matrix, transform_points
 
 HALF_TURN = make_pose(rotvec_to_matrix([0.0, 0.0, np.pi]))
 OBJECT = "object"  # the planning scene's name for the observed object's hull
+CARRY_MAY_PIVOT = "carry: no transit keeps the held object from turning about the fingers' axis"
 
 
 @dataclass(frozen=True)
@@ -51,6 +53,8 @@ class ExecutorConfig:
     # at 6 mm a mug turned 1-6 degrees in the grasp on the way rested its handle on the peg and fell (5 of 50)
     peg_short: float = 0.0  # m the object is placed short of its hang, out along the peg
     retreat_distance: float = 0.10  # m, back along the tool axis after release
+    carry_pivot: float = 45.0  # degrees gravity may turn about the fingers' axis on the carry (`held_without_pivot`)
+    pivot_lever: float = 0.065  # m: a held object's centroid this far from the fingers' axis or farther: carried so
     joint_speed: float = 1.05  # rad/s on transits (ur_rtde's moveJ default)
     joint_acceleration: float = 1.4  # rad/s^2
     line_speed: float = 0.15  # m/s on straight lines
@@ -109,24 +113,49 @@ class Planner:
                  config: ExecutorConfig = ExecutorConfig()) -> None:
         self.kin, self.limits, self.scene, self.config = kin, limits, scene, config
 
-    def transit(self, q0: np.ndarray, q1: np.ndarray, label: str, ignore: tuple[str, ...] = ()) -> JointTrajectory:
+    def transit(self, q0: np.ndarray, q1: np.ndarray, label: str, ignore: tuple[str, ...] = (),
+                allowed: Callable[[np.ndarray], bool] | None = None) -> JointTrajectory:
         """A collision-free chain of Ruckig joint motions q0 -> q1: the direct one, else through the
-        waypoints of the sampling planner (`app.motion.sampling`)."""
+        waypoints of the sampling planner (`app.motion.sampling`); `allowed`: a path constraint on
+        every state (`held_without_pivot`)."""
         direct = self._timed(np.array([q0, q1]), label)
-        hits = self._collisions(direct, ignore)
+        hits = self._collisions(direct, ignore, allowed)
         if not hits:
             return direct
         try:
-            waypoints = plan_joint_path(self.scene, q0, q1, ignore, self.config.sampling)
+            waypoints = plan_joint_path(self.scene, q0, q1, ignore, self.config.sampling, allowed)
         except NoPath as exc:
             raise NoIKSolution(f"{label}: {exc} (the direct one hits {', '.join(hits[:3])})") from None
         dense = densify(waypoints, self.config.sampling.max_step / 2)
         # last, on the very segments the planner checked (docs/decisions.md)
         for path, straight in ((waypoints, False), (dense, False), (waypoints, True)):
             traj = self._timed(path, label, straight)
-            if not self._collisions(traj, ignore):
+            if not self._collisions(traj, ignore, allowed):
                 return traj
         raise NoIKSolution(f"{label}: the sampled joint path collides once timed ({', '.join(hits[:3])} on the direct one)")
+
+    def carry(self, q0: np.ndarray, q1: np.ndarray, ignore: tuple[str, ...] = (),
+              lever: float = 0.0) -> tuple[JointTrajectory, bool]:
+        """The transit with the object held, and whether it keeps the object from pivoting. Its centroid
+        `lever` m or more from the fingers' axis: one that turns it little about that axis first
+        (`held_without_pivot`), else any (a joint transit between IK branches swung a bottle held 11 cm
+        above its centroid upside down, and it turned 81 degrees in the grasp; mugs held at the rim,
+        4-5 cm, turned 1-4 degrees on such swings)."""
+        if lever < self.config.pivot_lever:
+            return self.transit(q0, q1, "carry", ignore), True
+        try:
+            return self.transit(q0, q1, "carry", ignore, held_without_pivot(self.kin, q0, q1, self.config.carry_pivot)), True
+        except NoIKSolution:
+            return self.transit(q0, q1, "carry", ignore), False
+
+    def held_lever(self, T_base_grasp: np.ndarray) -> float:
+        """How far (m) the observed object's centroid lies from the fingers' axis (the tool's y through
+        the TCP) when grasped at T_base_grasp: the arm gravity turns it about; 0 without a cloud."""
+        solid = self.scene.solids.get(OBJECT)
+        if solid is None:
+            return 0.0
+        r = transform_points(np.linalg.inv(T_base_grasp), solid.mean(axis=0, keepdims=True))[0]  # (3,) TCP frame
+        return float(np.hypot(r[0], r[2]))
 
     def _timed(self, waypoints: np.ndarray, label: str, straight: bool = False) -> JointTrajectory:
         """Ruckig rest-to-rest segments through joint waypoints (K, 6); `straight`: phase-synchronised."""
@@ -150,13 +179,18 @@ class Planner:
         start = time.perf_counter()
         widths = widths or FingerWidths.fully_open(self.scene.geometry.stroke)
         errors = []
+        plans = []  # a plan whose carry may pivot the object is kept while the other half-turn is tried
         for flip in self._flips_nearest_first(q_start, T_base_grasp):
             try:
                 T_place = None if T_base_place is None else T_base_place @ flip
-                plan = self._pick_place(q_start, T_base_grasp @ flip, T_place, place_direction, widths)
+                plans.append(self._pick_place(q_start, T_base_grasp @ flip, T_place, place_direction, widths))
             except NoIKSolution as exc:
                 errors.append(str(exc))
                 continue
+            if CARRY_MAY_PIVOT not in plans[-1].notes:
+                break
+        if plans:
+            plan = next((p for p in plans if CARRY_MAY_PIVOT not in p.notes), plans[0])
             plan.seconds = time.perf_counter() - start
             return plan
         raise NoIKSolution(" / ".join(dict.fromkeys(errors)))
@@ -189,10 +223,11 @@ class Planner:
         approach, lift = self._first(at_grasp, grasp_lines)
         with self.scene.fingers(widths.approach):
             to_pre_grasp = self.transit(q_start, approach.q[0], "to pre-grasp")
-        rest = [] if T_place is None else self._place_segments(lift.end, T_grasp, T_place, place_direction, widths)
+        rest, notes = ([], []) if T_place is None else self._place_segments(lift.end, T_grasp, T_place,
+                                                                             place_direction, widths)
         segments = [to_pre_grasp, approach, lift, *rest]
         travel = float(sum(np.abs(np.diff(s.q, axis=0)).sum() for s in segments))
-        return PickPlacePlan(segments, T_grasp, T_place, travel=travel, widths=widths)
+        return PickPlacePlan(segments, T_grasp, T_place, travel=travel, notes=notes, widths=widths)
 
     def place_from(self, q_now: np.ndarray, T_base_grasp: np.ndarray, T_base_place: np.ndarray,
                    place_direction: np.ndarray, widths: FingerWidths | None = None) -> PickPlacePlan:
@@ -200,12 +235,13 @@ class Planner:
         the grasp is made): carry, place, retreat, clear, home (`pick_place` for the arguments)."""
         start = time.perf_counter()
         widths = widths or FingerWidths.fully_open(self.scene.geometry.stroke)
-        segments = self._place_segments(q_now, T_base_grasp, T_base_place, place_direction, widths)
+        segments, notes = self._place_segments(q_now, T_base_grasp, T_base_place, place_direction, widths)
         travel = float(sum(np.abs(np.diff(s.q, axis=0)).sum() for s in segments))
-        return PickPlacePlan(segments, T_base_grasp, T_base_place, time.perf_counter() - start, travel, widths=widths)
+        return PickPlacePlan(segments, T_base_grasp, T_base_place, time.perf_counter() - start, travel, notes, widths)
 
-    def _place_segments(self, q_from, T_grasp, T_place, place_direction, widths: FingerWidths) -> list[JointTrajectory]:
-        """carry (from q_from, the object held), place, retreat, clear, home."""
+    def _place_segments(self, q_from, T_grasp, T_place, place_direction,
+                        widths: FingerWidths) -> tuple[list[JointTrajectory], list[str]]:
+        """carry (from q_from, the object held), place, retreat, clear, home; and the plan's notes."""
         c = self.config
         held, released = widths.held, widths.released
         backs = line_offsets(np.array([0.0, 0.0, -1.0]), c.retreat_distance, c)  # in the TCP frame at the place
@@ -232,10 +268,10 @@ class Planner:
                 if not self.scene.collisions(place.q[0], (OBJECT,)):
                     break
         with self.scene.holding(OBJECT, T_grasp), self.scene.fingers(held):  # the carried object must clear the cell too
-            carry = self.transit(q_from, place.q[0], "carry", ignore=(OBJECT,))
+            carry, kept = self.carry(q_from, place.q[0], (OBJECT,), self.held_lever(T_grasp))
         with self.scene.fingers(released):
             home = self.transit(clear.end, np.asarray(c.home_q), "home", ignore=(OBJECT,))
-        return [carry, place, retreat, clear, home]
+        return [carry, place, retreat, clear, home], [] if kept else [CARRY_MAY_PIVOT]
 
     def _first_line(self, q: np.ndarray, targets: list[np.ndarray], label: str) -> JointTrajectory:
         """The line from FK(q) to the first target it can follow (the default first, then the alternatives)."""
@@ -245,11 +281,45 @@ class Planner:
         """plan_lines(q) for the first IK candidate (of at most `ik_candidates`) whose lines work."""
         return first_that_works(candidates[: self.config.ik_candidates], plan_lines)
 
-    def _collisions(self, traj: JointTrajectory, ignore: tuple[str, ...]) -> list[str]:
-        for q in traj.q[:: self.config.check_every]:
+    def _collisions(self, traj: JointTrajectory, ignore: tuple[str, ...],
+                    allowed: Callable[[np.ndarray], bool] | None = None) -> list[str]:
+        """What the timed motion hits (or 'path constraint' where `allowed` refuses a state); [] if nothing."""
+        for q in [*traj.q[:: self.config.check_every], traj.end]:
             if hits := self.scene.collisions(q, ignore):
                 return hits
-        return self.scene.collisions(traj.end, ignore)
+            if allowed is not None and not allowed(q):
+                return ["path constraint"]
+        return []
+
+
+def held_without_pivot(kin: UR5Kinematics, q0: np.ndarray, q1: np.ndarray, extra: float) -> Callable[[np.ndarray], bool]:
+    """The carry's path constraint. A two-finger grip resists turns about every axis but the fingers'
+    own (the tool's y), where only the pads' torsional friction holds the object, so gravity may swing
+    about that axis, seen from the tool, at most as far as `extra` degrees (or as far as q1 needs); an
+    object turned on its head over the fingers (swing 2) is refused too, balanced as it may be:
+
+        g(q) = R(q)^T (0, 0, -1)                   gravity in the tool frame
+        p(q) = g(q) - (g(q) . y) y                 its part across the fingers' axis
+        swing(q) = | p(q) - |p(q)| p(q0) / |p(q0)| |   = |p(q)| 2 sin(theta / 2), theta its turn about y
+        swing(q) <= max(swing(q1), 2 sin(extra / 2))
+    """
+    down, y = np.array([0.0, 0.0, -1.0]), np.array([0.0, 1.0, 0.0])
+
+    def across(q: np.ndarray) -> np.ndarray:
+        g = kin.fk(q)[:3, :3].T @ down  # (3,)
+        return g - (g @ y) * y
+
+    p0 = across(q0)
+    if np.linalg.norm(p0) < 1e-3:  # the fingers' axis vertical: gravity cannot pivot the object
+        return lambda q: True
+    p0 = p0 / np.linalg.norm(p0)
+
+    def swing(q: np.ndarray) -> float:
+        p = across(q)
+        return float(np.linalg.norm(p - np.linalg.norm(p) * p0))
+
+    limit = max(swing(q1), 2.0 * np.sin(np.radians(extra) / 2.0)) + 1e-9
+    return lambda q: bool(swing(q) <= limit)
 
 
 def first_that_works(items: list, attempt):

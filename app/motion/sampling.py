@@ -9,6 +9,7 @@ motion again, where `densify` helps when a timed segment strays from its straigh
 """
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -44,9 +45,11 @@ def _ompl():
 
 
 def plan_joint_path(scene: PlanningScene, q0: np.ndarray, q1: np.ndarray, ignore: tuple[str, ...] = (),
-                    config: SamplingConfig = SamplingConfig()) -> np.ndarray:
+                    config: SamplingConfig = SamplingConfig(),
+                    allowed: Callable[[np.ndarray], bool] | None = None) -> np.ndarray:
     """Collision-free joint waypoints (K, 6) from q0 to q1, both included, or NoPath - at once when an
-    end collides (RRT-Connect would sample towards an invalid goal until its time is up)."""
+    end collides (RRT-Connect would sample towards an invalid goal until its time is up). `allowed`:
+    a path constraint every state must meet too (MoveIt's path constraints, checked by rejection)."""
     q0, q1 = np.asarray(q0, float), np.asarray(q1, float)
     for end, q in (("start", q0), ("goal", q1)):
         hits = scene.collisions(q, ignore)
@@ -63,7 +66,11 @@ def plan_joint_path(scene: PlanningScene, q0: np.ndarray, q1: np.ndarray, ignore
         bounds.setHigh(j, float(high[j]))
     space.setBounds(bounds)
     setup = og.SimpleSetup(space)
-    setup.setStateValidityChecker(lambda state: scene.is_free(_array(state, dof), ignore))
+    def valid(state) -> bool:
+        q = _array(state, dof)
+        return bool((allowed is None or allowed(q)) and scene.is_free(q, ignore))  # the cheap test first
+
+    setup.setStateValidityChecker(valid)
     info = setup.getSpaceInformation()
     info.setStateValidityCheckingResolution(config.resolution / space.getMaximumExtent())
     planner = og.RRTConnect(info)
@@ -76,7 +83,8 @@ def plan_joint_path(scene: PlanningScene, q0: np.ndarray, q1: np.ndarray, ignore
     try:
         solved = setup.solve(config.timeout) and setup.haveExactSolutionPath()
         if not solved:
-            raise NoPath(f"no collision-free joint path within {config.timeout:g} s of RRT-Connect")
+            what = "collision-free" if allowed is None else "collision-free, constrained"
+            raise NoPath(f"no {what} joint path within {config.timeout:g} s of RRT-Connect")
         path = setup.getSolutionPath()
         simplifier = setup.getPathSimplifier()
         simplifier.reduceVertices(path)  # shortcut between random pairs of vertices
