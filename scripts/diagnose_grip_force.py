@@ -1,5 +1,5 @@
 """How hard the simulated gripper's pads press a fixed block for each force asked (docs/decisions.md,
-"The grip force: found, tried twice, not changed"): the fingers close on a static block between the pads, the
+"The grip force: found, tried three times, not changed"): the fingers close on a static block between the pads, the
 world steps 50 more times, and the finger motors' forces and the pads' contact forces are printed.
 
 Usage (repo root): .venv/bin/python scripts/diagnose_grip_force.py [FORCE ...]   (default 10 20 30 40 60 N; ~5 s)
