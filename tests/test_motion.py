@@ -649,3 +649,30 @@ def test_a_carry_that_may_pivot_the_object_sends_the_planner_to_the_other_half_t
     assert np.allclose(plan.T_base_grasp, T_grasp @ taken) and np.allclose(plan.T_base_place, T_place @ taken)
     assert (CARRY_MAY_PIVOT in plan.notes) == all(pivots_on)
     assert any(np.allclose(f, HALF_TURN) for f in flips)
+
+
+def test_an_object_held_near_its_centroid_gets_a_short_search_for_a_carry_that_keeps_it(kin, limits, scene,
+                                                                                       monkeypatch):
+    """A carry whose direct path stands the object on its head (the wrist's last joint a full turn):
+    the constrained search runs for `short_lever_search` for a mug held at its rim, for the planner's
+    full time for a bottle held at its neck, and only the latter's fallback is noted."""
+    import app.motion.executor as executor
+
+    T0, q0 = _side_grasp(kin)
+    q1 = q0.copy()
+    q1[5] -= 2 * np.pi  # the same pose, the tool turned once about its axis on the way
+    budgets = []
+    real = executor.plan_joint_path
+
+    def spy(scene_, a, b, ignore=(), config=executor.SamplingConfig(), allowed=None):
+        budgets.append((config.timeout, allowed is not None))
+        return real(scene_, a, b, ignore, config, allowed)
+
+    monkeypatch.setattr(executor, "plan_joint_path", spy)
+    config = executor.ExecutorConfig(sampling=executor.SamplingConfig(timeout=0.5))
+    planner = executor.Planner(kin, limits, scene, config)
+    for lever, budget, noted in ((0.04, config.short_lever_search, False), (0.11, 0.5, True)):
+        budgets.clear()
+        traj, kept = planner.carry(q0, q1, lever=lever)
+        assert budgets[0] == (budget, True) and kept is not noted
+        assert np.allclose(traj.q[-1], q1, atol=1e-6)

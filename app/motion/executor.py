@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -54,7 +54,9 @@ class ExecutorConfig:
     peg_short: float = 0.0  # m the object is placed short of its hang, out along the peg
     retreat_distance: float = 0.10  # m, back along the tool axis after release
     carry_pivot: float = 45.0  # degrees gravity may turn about the fingers' axis on the carry (`held_without_pivot`)
-    pivot_lever: float = 0.065  # m: a held object's centroid this far from the fingers' axis or farther: carried so
+    pivot_lever: float = 0.065  # m: a held object's centroid this far from the fingers' axis or farther: the planner's full
+    # search for a carry that keeps it from pivoting, else a short one:
+    short_lever_search: float = 0.3  # s of constrained search for an object held nearer its centroid
     joint_speed: float = 1.05  # rad/s on transits (ur_rtde's moveJ default)
     joint_acceleration: float = 1.4  # rad/s^2
     line_speed: float = 0.15  # m/s on straight lines
@@ -114,16 +116,17 @@ class Planner:
         self.kin, self.limits, self.scene, self.config = kin, limits, scene, config
 
     def transit(self, q0: np.ndarray, q1: np.ndarray, label: str, ignore: tuple[str, ...] = (),
-                allowed: Callable[[np.ndarray], bool] | None = None) -> JointTrajectory:
+                allowed: Callable[[np.ndarray], bool] | None = None,
+                search: SamplingConfig | None = None) -> JointTrajectory:
         """A collision-free chain of Ruckig joint motions q0 -> q1: the direct one, else through the
         waypoints of the sampling planner (`app.motion.sampling`); `allowed`: a path constraint on
-        every state (`held_without_pivot`)."""
+        every state (`held_without_pivot`); `search`: the planner's settings (the configured ones when None)."""
         direct = self._timed(np.array([q0, q1]), label)
         hits = self._collisions(direct, ignore, allowed)
         if not hits:
             return direct
         try:
-            waypoints = plan_joint_path(self.scene, q0, q1, ignore, self.config.sampling, allowed)
+            waypoints = plan_joint_path(self.scene, q0, q1, ignore, search or self.config.sampling, allowed)
         except NoPath as exc:
             raise NoIKSolution(f"{label}: {exc} (the direct one hits {', '.join(hits[:3])})") from None
         dense = densify(waypoints, self.config.sampling.max_step / 2)
@@ -136,17 +139,19 @@ class Planner:
 
     def carry(self, q0: np.ndarray, q1: np.ndarray, ignore: tuple[str, ...] = (),
               lever: float = 0.0) -> tuple[JointTrajectory, bool]:
-        """The transit with the object held, and whether it keeps the object from pivoting. Its centroid
-        `lever` m or more from the fingers' axis: one that turns it little about that axis first
-        (`held_without_pivot`), else any (a joint transit between IK branches swung a bottle held 11 cm
-        above its centroid upside down, and it turned 81 degrees in the grasp; mugs held at the rim,
-        4-5 cm, turned 1-4 degrees on such swings)."""
-        if lever < self.config.pivot_lever:
-            return self.transit(q0, q1, "carry", ignore), True
+        """The transit with the object held, and whether it keeps the object from pivoting: one that
+        turns it little about the fingers' axis first (`held_without_pivot`), else any. A joint transit
+        between IK branches swung a bottle held 11 cm above its centroid (`lever`) upside down, and it
+        turned 81 degrees in the grasp; such a carry gets the planner's full search and, failing, says
+        so. A mug held at its rim (4-5 cm) mostly rides such swings (1-4 degrees), once turned 24: its
+        search is short (`short_lever_search`) and any transit is taken without a word."""
+        short = lever < self.config.pivot_lever
+        search = replace(self.config.sampling, timeout=self.config.short_lever_search) if short else None
         try:
-            return self.transit(q0, q1, "carry", ignore, held_without_pivot(self.kin, q0, q1, self.config.carry_pivot)), True
+            return self.transit(q0, q1, "carry", ignore, held_without_pivot(self.kin, q0, q1, self.config.carry_pivot),
+                                search), True
         except NoIKSolution:
-            return self.transit(q0, q1, "carry", ignore), False
+            return self.transit(q0, q1, "carry", ignore), short
 
     def held_lever(self, T_base_grasp: np.ndarray) -> float:
         """How far (m) the observed object's centroid lies from the fingers' axis (the tool's y through
