@@ -32,7 +32,7 @@ from app.motion.trajectory import JointTrajectory, path_timing, through_waypoint
 from hardware.interfaces import Arm, JointLimits
 from hardware.kinematics import UR5Kinematics
 from hardware.robot_description import HOME_Q
-from hardware.se3 import line_length, make_pose, rotvec_to_matrix, transform_points
+from hardware.se3 import invert, line_length, make_pose, rotvec_to_matrix, transform_points
 
 HALF_TURN = make_pose(rotvec_to_matrix([0.0, 0.0, np.pi]))
 OBJECT = "object"  # the planning scene's name for the observed object's hull
@@ -159,7 +159,7 @@ class Planner:
         solid = self.scene.solids.get(OBJECT)
         if solid is None:
             return 0.0
-        r = transform_points(np.linalg.inv(T_base_grasp), solid.mean(axis=0, keepdims=True))[0]  # (3,) TCP frame
+        r = transform_points(invert(T_base_grasp), solid.mean(axis=0, keepdims=True))[0]  # (3,) TCP frame
         return float(np.hypot(r[0], r[2]))
 
     def _timed(self, waypoints: np.ndarray, label: str, straight: bool = False) -> JointTrajectory:
