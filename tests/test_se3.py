@@ -55,3 +55,20 @@ def test_interpolated_pose_is_scipy_slerp_and_lerp(rng):
         assert np.allclose(T[:3, :3], Slerp([0.0, 1.0], Rotation.from_matrix([R0, R1]))(s).as_matrix(), atol=1e-9)
         assert np.allclose(T[:3, 3], (1 - s) * T0[:3, 3] + s * T1[:3, 3])
         assert np.allclose(se3.interpolate_pose(T0, T1, 0.0), T0) and np.allclose(se3.interpolate_pose(T0, T1, 1.0), T1)
+
+
+def test_pybullet_pose_conversion_round_trips_and_matches_scipy(rng):
+    from scipy.spatial.transform import Rotation
+
+    from hardware.bullet import pose_to_pybullet, pybullet_to_pose
+
+    for T in se3.random_poses(50, rng, translation_scale=1.0):
+        position, quaternion = pose_to_pybullet(T)
+        assert np.allclose(pybullet_to_pose(position, quaternion), T, atol=1e-12)
+        expected = Rotation.from_matrix(T[:3, :3]).as_quat()
+        assert min(np.abs(quaternion - expected).max(), np.abs(quaternion + expected).max()) < 1e-12
+    nearly = se3.random_poses(1, rng)[0].astype(np.float32).astype(np.float64)  # not a rotation to 1e-9
+    nearly[:3, :3] *= 1.0 + 1e-6
+    _, quaternion = pose_to_pybullet(nearly)
+    assert abs(np.linalg.norm(quaternion) - 1.0) < 1e-12
+    assert np.allclose(pybullet_to_pose([0, 0, 0], quaternion)[:3, :3], nearly[:3, :3], atol=1e-5)

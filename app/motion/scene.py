@@ -14,6 +14,10 @@ also names what it would hit ("held-rack"); the gripper's own links, which hold 
 Without it a carried mug was swept through the rack in 2 of 10 executed teacher jobs (our fix for
 the protective stops that followed; MoveIt calls this an attached collision object).
 
+A broad phase skips every query whose two bounding boxes (Bullet's, grown by the margin) do not
+overlap: the answers stay the same, and a state is checked in about 0.09 ms rather than 0.14 (with
+the pose conversion of the carried object no longer SciPy's, a carry's state in half the time).
+
 `gripper_collisions(T_base_tcp)` asks the same of the gripper alone, open, at a TCP pose, without
 the arm: a cheap first test of candidate grasp and place poses before any IK (`app.jobs.choice`).
 Inside `fingers(width)` both grippers' fingers stand that far apart instead of fully open: closed
@@ -61,13 +65,19 @@ class PlanningScene:
         joints, links = joint_and_link_indices(self.robot, self.client)
         self.arm_joints = [joints[name] for name in JOINT_NAMES]
         self.finger_joints = [joints[name] for name in FINGER_JOINTS]
+        self._joints = [*self.arm_joints, *self.finger_joints]  # set together: one call per state
         self.obstacles: dict[str, int] = {"table": add_table(self.client), **add_fixtures(self.client, layout)}
         self.links = {name: links[name] for name in ("base_link", *ARM_LINKS, *GRIPPER_LINKS)}
         self.self_pairs = self._self_pairs()
+        names = list(self.links)
+        self._off_table = np.array([name not in ON_TABLE for name in names])  # (L,) links checked against the table
+        self._arm = np.array([name in ARM_LINKS for name in names])  # (L,) links checked against the held object
+        self._pair_index = np.array([[names.index(a), names.index(b)] for a, b in self.self_pairs]).reshape(-1, 2)
         self.solids: dict[str, np.ndarray] = {}  # cloud obstacles' points (with their shadow, no footprint)
         self._shapes: dict[str, int] = {}  # the collision shape of each cloud obstacle
         self._held_shapes: dict[str, int] = {}  # the collision shape of each cloud obstacle when carried
         self.held: tuple[int, np.ndarray] | None = None  # (body, T_tcp_body) while holding
+        self._boxes: dict[str, np.ndarray] = {}  # the obstacles' bounding boxes (2, 3), once asked for
         self.ghost = self._load_ghost_gripper()
 
     def close(self) -> None:
@@ -85,10 +95,9 @@ class PlanningScene:
 
     def set_q(self, q: np.ndarray) -> None:
         """Put the model arm at q, the fingers `finger_width` apart (fully open unless `fingers` says)."""
-        for joint, qi in zip(self.arm_joints, q):
-            p.resetJointState(self.robot, joint, float(qi), 0.0, physicsClientId=self.client)
-        for joint in self.finger_joints:
-            p.resetJointState(self.robot, joint, self.finger_width / 2, 0.0, physicsClientId=self.client)
+        half = self.finger_width / 2
+        p.resetJointStatesMultiDof(self.robot, self._joints, [[float(qi)] for qi in q] + [[half], [half]],
+                                   physicsClientId=self.client)
 
     @contextmanager
     def fingers(self, width: float):
@@ -127,6 +136,7 @@ class PlanningScene:
         """Drop a run-time obstacle (no-op if absent) and its hulls' files (Bullet keeps the shapes
         until `rebuild`: its removeCollisionShape frees nothing)."""
         body = self.obstacles.pop(name, None)
+        self._boxes.pop(name, None)
         self.solids.pop(name, None)
         if body is not None:
             p.removeBody(body, physicsClientId=self.client)
@@ -151,9 +161,11 @@ class PlanningScene:
         return self._obstacles_near(self.ghost, ignore)
 
     def _obstacles_near(self, body: int, ignore: tuple[str, ...]) -> list[str]:
-        """Obstacles (not in `ignore`) within the margin of any link of a free body."""
-        return [name for name, other in self.obstacles.items()
-                if name not in ignore and p.getClosestPoints(body, other, self.margin, physicsClientId=self.client)]
+        """Obstacles (not in `ignore`) within the margin of a free body."""
+        names, boxes = self._obstacle_boxes(ignore)
+        near = self._overlap(self._box(body), boxes)  # (O,)
+        return [name for name, hit in zip(names, near)
+                if hit and p.getClosestPoints(body, self.obstacles[name], self.margin, physicsClientId=self.client)]
 
     @contextmanager
     def holding(self, name: str, T_base_tcp: np.ndarray):
@@ -183,27 +195,65 @@ class PlanningScene:
 
     def _contacts(self, q: np.ndarray, ignore: tuple[str, ...]) -> Iterator[str]:
         """The contacts of `collisions`, one at a time: obstacles (one query per obstacle for all the
-        robot's links), then the self pairs, then the carried object."""
+        robot's links), then the self pairs, then the carried object; each only where the bounding
+        boxes say it may be within the margin."""
         self.set_q(q)
-        for obstacle, body in self.obstacles.items():
-            if obstacle in ignore:
+        boxes = self._link_boxes()  # (L, 2, 3)
+        names, obstacle_boxes = self._obstacle_boxes(ignore)
+        reach = self._overlap(boxes[:, None], obstacle_boxes[None])  # (L, O)
+        reach &= self._off_table[:, None] | (np.array(names) != "table")[None]
+        for obstacle, near_any in zip(names, reach.any(axis=0)):
+            if not near_any:
                 continue
-            near = self._links_near(body)
+            near = self._links_near(self.obstacles[obstacle])
             yield from (f"{link}-{obstacle}" for link, index in self.links.items()
                         if index in near and not (obstacle == "table" and link in ON_TABLE))
-        for a, b in self.self_pairs:
+        for a, b in self._pairs_in_reach(boxes):
             if self._near(self.robot, self.robot, self.links[a], self.links[b]):
                 yield f"{a}-{b}"
-        yield from self._held_collisions(q, ignore)
+        yield from self._held_collisions(q, ignore, boxes)
 
-    def _held_collisions(self, q: np.ndarray, ignore: tuple[str, ...]) -> list[str]:
-        """What the carried object hits at q: obstacles not ignored, arm links but the gripper's."""
+    # The broad phase: Bullet's axis-aligned bounding boxes, grown by the margin. Links whose boxes do
+    # not overlap are farther apart than the margin and need no query (the answers stay the same).
+    def _link_boxes(self) -> np.ndarray:
+        """(L, 2, 3) lower and upper corners of the robot's links' boxes, in `links` order."""
+        return np.array([p.getAABB(self.robot, index, physicsClientId=self.client) for index in self.links.values()])
+
+    def _overlap(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """Whether boxes a and b (..., 2, 3), grown by the margin, overlap (...)."""
+        return ((a[..., 0, :] <= b[..., 1, :] + self.margin) & (b[..., 0, :] <= a[..., 1, :] + self.margin)).all(axis=-1)
+
+    def _box(self, body: int) -> np.ndarray:
+        """(2, 3) the box around all of a body's links."""
+        links = range(-1, p.getNumJoints(body, physicsClientId=self.client))
+        boxes = np.array([p.getAABB(body, link, physicsClientId=self.client) for link in links])  # (K, 2, 3)
+        return np.array([boxes[:, 0].min(axis=0), boxes[:, 1].max(axis=0)])
+
+    def _obstacle_boxes(self, ignore: tuple[str, ...]) -> tuple[list[str], np.ndarray]:
+        """The obstacles not in `ignore` and their boxes (O, 2, 3)."""
+        names = [name for name in self.obstacles if name not in ignore]
+        for name in names:  # obstacles never move: each box is computed once
+            if name not in self._boxes:
+                self._boxes[name] = self._box(self.obstacles[name])
+        return names, np.array([self._boxes[name] for name in names]).reshape(-1, 2, 3)
+
+    def _pairs_in_reach(self, boxes: np.ndarray) -> list[tuple[str, str]]:
+        """The self pairs whose links' boxes overlap (a quarter of them, on average)."""
+        overlap = self._overlap(boxes[self._pair_index[:, 0]], boxes[self._pair_index[:, 1]])  # (P,)
+        return [pair for pair, near in zip(self.self_pairs, overlap) if near]
+
+    def _held_collisions(self, q: np.ndarray, ignore: tuple[str, ...], boxes: np.ndarray) -> list[str]:
+        """What the carried object hits at q: obstacles not ignored, arm links but the gripper's
+        (`boxes`: the links' boxes at q)."""
         if self.held is None:
             return []
         body, T_tcp_body = self.held
         set_pose(self.client, body, self.kinematics.fk(q) @ T_tcp_body)
         found = [f"{HELD}-{name}" for name in self._obstacles_near(body, ignore)]
-        return found + [f"{HELD}-{link}" for link in ARM_LINKS if self._near(body, self.robot, -1, self.links[link])]
+        if not (self._overlap(boxes, self._box(body)) & self._arm).any():
+            return found
+        near = self._links_near(body)
+        return found + [f"{HELD}-{link}" for link in ARM_LINKS if self.links[link] in near]
 
     def _links_near(self, body: int) -> set[int]:
         """Indices of the robot's links within the margin of a body: one query for all of them."""
