@@ -56,7 +56,7 @@ class ExecutorConfig:
     carry_pivot: float = 45.0  # degrees gravity may turn about the fingers' axis on the carry (`held_without_pivot`)
     pivot_lever: float = 0.065  # m: a held object's centroid this far from the fingers' axis or farther: the planner's full
     # search for a carry that keeps it from pivoting, else a short one:
-    short_lever_search: float = 0.3  # s of constrained search for an object held nearer its centroid
+    short_lever_search: float = 0.2  # s of constrained search for an object held nearer its centroid
     joint_speed: float = 1.05  # rad/s on transits (ur_rtde's moveJ default)
     joint_acceleration: float = 1.4  # rad/s^2
     line_speed: float = 0.15  # m/s on straight lines
