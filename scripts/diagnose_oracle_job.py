@@ -98,3 +98,5 @@ for seed in args.seeds:
                                                           if k in ("place", "release", "retreat", "verify") or "failed" in k))
     if stops:
         print(f"  touching when the arm stopped: {stops[0] or 'nothing'}")
+    if result.notes:
+        print("  notes: " + "; ".join(result.notes))

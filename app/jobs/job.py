@@ -30,6 +30,7 @@ from app.jobs.check import placed
 from app.jobs.choice import NoCandidate, choose, describe
 from app.jobs.clearance import gripper_clear
 from app.jobs.context import JobContext, Predictor
+from app.jobs.guarded import guarded_line, guarded_place
 from app.jobs.held_place import look_and_place
 from app.jobs.record import STAGES, GraspMissed, JobFailed, JobHooks, JobResult, check_held, ur
 from app.jobs.settings import JOB_IMITATION, JobConfig, looks_again
@@ -127,7 +128,7 @@ def _run(job: JobContext) -> None:
         job.result.attempts.append({"attempt": attempt, **describe(chosen, "held")})
         job.result.failed_stage = None
         break
-    _place(job, plan, sent)
+    _place(job, planner, plan, sent)
 
 
 def _observe(job: JobContext) -> np.ndarray:
@@ -218,31 +219,16 @@ def _guarded_approach(job: JobContext, approach) -> float:
     is a miss (GraspMissed: the next candidate is tried), rather than pressing on into a protective stop.
     A contact within `APPROACH_ARRIVED` of the grasp (the palm on a bowl's rim) is the grasp: returns
     how far short (m) the arm stopped there, 0 when it got there."""
-    job.arm.startContactDetection(job.config.approach_contact_force)
-    try:
-        execute(job.arm, approach, job.config.executor.end_tolerance)
+    met, why = guarded_line(job, approach)
+    if met is None:
         return 0.0
-    except ExecutionError as exc:
-        if not job.arm.readContactDetection():
-            raise
-        met = _approach_progress(job, approach)
-        if met <= APPROACH_ARRIVED:
-            job.result.notes.append(f"approach: the tool met the object {1000 * met:.0f} mm before the grasp; "
-                                    "closed there")
-            return met
-        job.arm.stopContactDetection()
-        if not job.arm.moveL(job.arm.getForwardKinematics(approach.q[0]), APPROACH_BACK_OFF_SPEED):
-            raise JobFailed(f"approach: backing off after a contact stopped: {job.arm.getLastError()}") from None
-        raise GraspMissed(f"approach: the tool met something {1000 * met:.0f} mm before the grasp "
-                          f"({exc}); backed off to the pre-grasp") from None
-    finally:
-        job.arm.stopContactDetection()
-
-
-def _approach_progress(job: JobContext, approach) -> float:
-    """How far (m) the TCP still was from the end of the approach line."""
-    end = job.kin.fk(approach.end)[:3, 3]
-    return float(np.linalg.norm(job.kin.fk(job.arm.getActualQ())[:3, 3] - end))
+    if met <= APPROACH_ARRIVED:
+        job.result.notes.append(f"approach: the tool met the object {1000 * met:.0f} mm before the grasp; closed there")
+        return met
+    if not job.arm.moveL(job.arm.getForwardKinematics(approach.q[0]), APPROACH_BACK_OFF_SPEED):
+        raise JobFailed(f"approach: backing off after a contact stopped: {job.arm.getLastError()}")
+    raise GraspMissed(f"approach: the tool met something {1000 * met:.0f} mm before the grasp ({why}); "
+                      "backed off to the pre-grasp")
 
 
 def _carry(job: JobContext, plan) -> None:
@@ -267,18 +253,23 @@ def _recover(job: JobContext, planner: Planner, pick) -> None:
         execute(job.arm, planner.transit(job.arm.getActualQ(), home, "recover"), tolerance)
 
 
-def _place(job: JobContext, plan, sent: np.ndarray) -> None:
+def _place(job: JobContext, planner: Planner, plan, sent: np.ndarray) -> None:
     """Place, release, retreat, verify (`sent`: the observed cloud moved where it should end)."""
     tolerance = job.config.executor.end_tolerance
     with job.stage("place"):
-        execute(job.arm, plan.segment("place"), tolerance)
+        short = guarded_place(job, plan.segment("place"))
     with job.stage("release"):
         held = job.gripper.width
-        _let_go(job, min(job.gripper.stroke, held + job.config.release_clearance), held)
+        released = min(job.gripper.stroke, held + job.config.release_clearance)
+        _let_go(job, released, held)
     with job.stage("retreat"):
-        back_to_start(job.arm, plan.segment("retreat"), tolerance)  # letting go may have pushed the wrist
-        for name in ("retreat", "clear", "home"):
-            execute(job.arm, plan.segment(name), tolerance)
+        if short:  # let go off the planned place: the way out is planned from there
+            leave = planner.leave(job.arm.getActualQ(), released)
+        else:
+            back_to_start(job.arm, plan.segment("retreat"), tolerance)  # letting go may have pushed the wrist
+            leave = [plan.segment(name) for name in ("retreat", "clear", "home")]
+        for segment in leave:
+            execute(job.arm, segment, tolerance)
     with job.stage("verify"):
         seen = placed(job.first, job.camera.capture(), job.T_base_cam, sent)
         job.result.seen = f"{'placed' if seen[0] else 'not placed'}: {seen[1]}"

@@ -249,20 +249,12 @@ class Planner:
         """carry (from q_from, the object held), place, retreat, clear, home; and the plan's notes."""
         c = self.config
         held, released = widths.held, widths.released
-        backs = line_offsets(np.array([0.0, 0.0, -1.0]), c.retreat_distance, c)  # in the TCP frame at the place
-        retreats = [T_place @ make_pose(t=back) for back in backs]
-
-        def retreat_and_clear(q: np.ndarray, T_retreat: np.ndarray):
-            retreat = self.line(q, T_retreat, "retreat", (OBJECT,))
-            T_clear = self.kin.fk(retreat.end)
-            T_clear[2, 3] += c.lift_height
-            return retreat, self.line(retreat.end, T_clear, "clear", (OBJECT,))
 
         def place_lines(q: np.ndarray, T_pre_place: np.ndarray):
             with self.scene.fingers(held):
                 place = reverse(self.line(q, T_pre_place, "place", (OBJECT,)))
             with self.scene.fingers(released):  # a retreat that leaves no way up is no retreat
-                return place, *first_that_works(retreats, lambda T: retreat_and_clear(q, T))
+                return place, *self._retreat_and_clear(q, T_place)
 
         with self.scene.fingers(held):
             at_place = solutions(self.kin, T_place, q_from, self.scene, c.ik, (OBJECT,), "place")
@@ -277,6 +269,27 @@ class Planner:
         with self.scene.fingers(released):
             home = self.transit(clear.end, np.asarray(c.home_q), "home", ignore=(OBJECT,))
         return [carry, place, retreat, clear, home], [] if kept else [CARRY_MAY_PIVOT]
+
+    def _retreat_and_clear(self, q: np.ndarray, T_place: np.ndarray) -> tuple[JointTrajectory, JointTrajectory]:
+        """From a place at q (the TCP at T_place): the first retreat back along the tool's axis (or one
+        of its alternatives) from whose end a line straight up works too, and that line."""
+        c = self.config
+        backs = line_offsets(np.array([0.0, 0.0, -1.0]), c.retreat_distance, c)  # in the TCP frame at the place
+
+        def retreat_and_clear(T_retreat: np.ndarray):
+            retreat = self.line(q, T_retreat, "retreat", (OBJECT,))
+            T_clear = self.kin.fk(retreat.end)
+            T_clear[2, 3] += c.lift_height
+            return retreat, self.line(retreat.end, T_clear, "clear", (OBJECT,))
+
+        return first_that_works([T_place @ make_pose(t=back) for back in backs], retreat_and_clear)
+
+    def leave(self, q: np.ndarray, released: float) -> list[JointTrajectory]:
+        """retreat, clear, home from where the object was let go at q (the fingers `released` m apart),
+        planned there and then: a place line that a contact cut short ends off its planned place."""
+        with self.scene.fingers(released):
+            retreat, clear = self._retreat_and_clear(q, self.kin.fk(q))
+            return [retreat, clear, self.transit(clear.end, np.asarray(self.config.home_q), "home", ignore=(OBJECT,))]
 
     def _first_line(self, q: np.ndarray, targets: list[np.ndarray], label: str) -> JointTrajectory:
         """The line from FK(q) to the first target it can follow (the default first, then the alternatives)."""
