@@ -63,6 +63,13 @@ class JobContext:
         e = self.config.executor
         return above_peg(self.T_base_fixture, self.t.fixture, e.peg_clearance, e.peg_short)
 
+    def searches_place(self) -> bool:
+        """Whether the place line is guarded and searched beside (`app.jobs.guarded`): a hang from a
+        predicted place, whose hole is a centimetre or two off; the oracle's exact hangs run as planned
+        (guarded, its resting mugs hung 45 of 50, not 47: a 30 N stop cut hangs short) and a shelf's
+        place line ends pressing on the shelf (a bottle that stood: 325 N)."""
+        return self.config.method != ORACLE and is_hang(self.t)
+
     def looks_for_hole(self) -> bool:
         """Whether the job tries places built from the handle hole: a hang by a method that is not the
         oracle, with `hole_places` on."""

@@ -33,7 +33,7 @@ from app.jobs.context import JobContext, Predictor
 from app.jobs.guarded import guarded_line, guarded_place
 from app.jobs.held_place import look_and_place
 from app.jobs.record import STAGES, GraspMissed, JobFailed, JobHooks, JobResult, check_held, ur
-from app.jobs.settings import JOB_IMITATION, JobConfig, is_hang, looks_again
+from app.jobs.settings import JOB_IMITATION, JobConfig, looks_again
 from app.motion.executor import OBJECT, ExecutionError, FingerWidths, Planner, back_to_start, execute, reverse
 from app.motion.ik import reach_failure
 from app.motion.scene import PlanningScene
@@ -257,9 +257,9 @@ def _place(job: JobContext, planner: Planner, plan, sent: np.ndarray) -> None:
     """Place, release, retreat, verify (`sent`: the observed cloud moved where it should end)."""
     tolerance = job.config.executor.end_tolerance
     with job.stage("place"):
-        if is_hang(job.t):  # onto a peg: guarded and searched (app.jobs.guarded)
+        if job.searches_place():
             short = guarded_place(job, plan.segment("place"))
-        else:  # a shelf's place line ends pressing on it (a bottle that stood: 325 N)
+        else:
             execute(job.arm, plan.segment("place"), tolerance)
             short = False
     with job.stage("release"):
