@@ -39,7 +39,7 @@ def job(monkeypatch):
         assert arm.moveJ(HOME_Q)
         gripper.close()
         kin = UR5Kinematics(tcp_offset=ur_to_pose(arm.getTCPOffset()))
-        yield SimpleNamespace(arm=arm, kin=kin, world=world, config=SimpleNamespace(approach_contact_force=30.0),
+        yield SimpleNamespace(arm=arm, kin=kin, world=world, config=SimpleNamespace(place_contact_force=30.0),
                               result=SimpleNamespace(notes=[]))
 
 
@@ -80,3 +80,11 @@ def test_a_place_blocked_on_every_line_fails_at_rest_at_the_pre_place(job):
     assert not job.arm.isProtectiveStopped()
     assert np.linalg.norm(ur_to_pose(job.arm.getActualTCPPose())[:3, 3] - T_pre[:3, 3]) < 0.002
     assert len(job.result.notes) == sum(n for _, n in SEARCH_RINGS)
+
+
+@pytest.mark.parametrize("name", ["approach_contact_force", "place_contact_force"])
+def test_a_contact_force_that_is_not_positive_is_refused_by_name(name):
+    from app.jobs.settings import JobConfig
+
+    with pytest.raises(ValueError, match=f"{name} must be a positive force"):
+        JobConfig(**{name: 0.0})

@@ -28,10 +28,11 @@ SEARCH_RINGS = ((0.006, 6), (0.012, 8), (0.018, 10))  # (radius m, offsets on th
 SEARCH_SPEED, SEARCH_ACCELERATION = 0.1, 0.5  # m/s, m/s^2 of the search's lines
 
 
-def guarded_line(job: JobContext, line) -> tuple[float | None, str]:
-    """Execute a joint trajectory under contact detection: (None, '') when it got to its end; (how far
-    (m) the TCP stopped short of it, why) when a contact stopped it; ExecutionError for any other stop."""
-    job.arm.startContactDetection(job.config.approach_contact_force)
+def guarded_line(job: JobContext, line, force: float) -> tuple[float | None, str]:
+    """Execute a joint trajectory under contact detection at `force` N: (None, '') when it got to its
+    end; (how far (m) the TCP stopped short of it, why) when a contact stopped it; ExecutionError for
+    any other stop."""
+    job.arm.startContactDetection(force)
     try:
         execute(job.arm, line, job.config.executor.end_tolerance)
         return None, ""
@@ -47,7 +48,7 @@ def guarded_place(job: JobContext, place) -> bool:
     """The place line under contact detection; a contact within `PLACE_ARRIVED` of the place lets go
     there, one farther out starts the search (`search_place`). Whether the arm stopped off the planned
     place (the way out is then planned from where it is)."""
-    met, why = guarded_line(job, place)
+    met, why = guarded_line(job, place, job.config.place_contact_force)
     if met is None:
         return False
     if met > PLACE_ARRIVED:
@@ -67,7 +68,7 @@ def search_place(job: JobContext, T_pre: np.ndarray, T_place: np.ndarray, met: f
         _move(job, _moved(T_pre, tried), "backing off to the pre-place")  # back along the line that met it
         _move(job, _moved(T_pre, offset), "the move aside")
         tried = offset
-        job.arm.startContactDetection(job.config.approach_contact_force)
+        job.arm.startContactDetection(job.config.place_contact_force)
         try:
             arrived = job.arm.moveL(pose_to_ur(_moved(T_place, offset)), SEARCH_SPEED, SEARCH_ACCELERATION)
             stopped = not arrived and job.arm.readContactDetection()

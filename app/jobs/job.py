@@ -219,7 +219,7 @@ def _guarded_approach(job: JobContext, approach) -> float:
     is a miss (GraspMissed: the next candidate is tried), rather than pressing on into a protective stop.
     A contact within `APPROACH_ARRIVED` of the grasp (the palm on a bowl's rim) is the grasp: returns
     how far short (m) the arm stopped there, 0 when it got there."""
-    met, why = guarded_line(job, approach)
+    met, why = guarded_line(job, approach, job.config.approach_contact_force)
     if met is None:
         return 0.0
     if met <= APPROACH_ARRIVED:

@@ -48,6 +48,8 @@ class JobConfig:
     look: SecondLookConfig = SecondLookConfig()
     approach_contact_force: float = 30.0  # N of change of the wrist's force, held 20 ms, that stops the approach line
     # (nothing held: every approach that reached its grasp changed it by 0 N; a finger on a mug's rim, 200-380 N)
+    place_contact_force: float = 30.0  # N of change, held 20 ms, that stops a predicted hang's place line and starts
+    # the search beside it (app.jobs.guarded)
     attempts: int = 3  # grasps tried before the job gives up
     most_plans: int = 6  # full plans tried per attempt before the plan stage gives up
     threads: int = 1  # torch threads: two threads beside one busy process took 2.5x as long as one (docs/jobs.md)
@@ -56,9 +58,9 @@ class JobConfig:
     executor: ExecutorConfig = ExecutorConfig()
 
     def __post_init__(self) -> None:
-        if not self.approach_contact_force > 0:
-            raise ValueError(f"job setting approach_contact_force must be a positive force in N, got "
-                             f"{self.approach_contact_force!r}")
+        for name in ("approach_contact_force", "place_contact_force"):
+            if not getattr(self, name) > 0:
+                raise ValueError(f"job setting {name} must be a positive force in N, got {getattr(self, name)!r}")
         for name in ("attempts", "most_plans", "threads"):
             if not isinstance(getattr(self, name), int) or getattr(self, name) < 1:
                 raise ValueError(f"job setting {name} must be an integer >= 1, got {getattr(self, name)!r}")
