@@ -4,7 +4,7 @@ A line runs with the arm's contact detection on (ur_rtde's `startContactDetectio
 the force on the tool stops the arm at rest, rather than pressing on into a protective stop.
 
 The place line of a mug threads its handle onto the rack's peg. The hole comes from the cloud, a
-few millimetres off, and the mug may have turned a few degrees in the grasp: the peg's tip then
+centimetre or two off, and the mug may have turned a few degrees in the grasp: the peg's tip then
 meets the handle or the wall 5-8 cm before the place (NIFT's resting mugs 9, 23, 25, 42 and 48
 stopped there in protective stops). A person would back off and try again a little to the side,
 as a robot threads a peg into a hole (a search about the nominal line, as in assembly):
