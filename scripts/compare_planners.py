@@ -52,7 +52,7 @@ def problems(scene: PlanningScene, n: int, seed: int = 0) -> list[tuple[np.ndarr
 
 
 def ompl_rrt_connect(scene, q0, q1, timeout):
-    return plan_joint_path(scene, q0, q1, config=SamplingConfig(timeout=timeout))
+    return plan_joint_path(scene, q0, q1, config=SamplingConfig(timeout=timeout, states=10**9))  # the same time for all
 
 
 def pyroboplan_rrt_connect(scene, q0, q1, timeout, shortcut: bool = True):

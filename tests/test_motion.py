@@ -236,6 +236,30 @@ def test_sampling_planner_goes_around_an_obstacle_on_the_direct_path(kin, scene)
         scene.remove("pillar")
 
 
+def test_the_search_budget_is_states_checked_not_seconds(kin, scene, monkeypatch):
+    """A slower collision check (a busy machine) plans the same path; a search that cannot succeed
+    stops after its states, long before its time cap."""
+    import time
+
+    from app.motion.sampling import NoPath, SamplingConfig, plan_joint_path
+
+    q0, q1, pillar = _pillar_between_two_reaches(kin)
+    scene.add_cloud("pillar", pillar)
+    try:
+        path = plan_joint_path(scene, q0, q1)
+        is_free = scene.is_free
+        monkeypatch.setattr(scene, "is_free", lambda q, ignore=(): time.sleep(2e-4) or is_free(q, ignore))
+        assert np.array_equal(plan_joint_path(scene, q0, q1), path)
+        checked = []
+        ends_only = lambda q: checked.append(q) or bool(np.allclose(q, q0) or np.allclose(q, q1))  # noqa: E731
+        start = time.perf_counter()
+        with pytest.raises(NoPath, match="within 300 states"):
+            plan_joint_path(scene, q0, q1, config=SamplingConfig(states=300, timeout=100.0), allowed=ends_only)
+        assert len(checked) >= 300 and time.perf_counter() - start < 5.0
+    finally:
+        scene.remove("pillar")
+
+
 def test_sampling_planner_refuses_a_colliding_goal_at_once_and_names_the_contact(kin, scene):
     import time
 
@@ -602,7 +626,7 @@ def test_a_carry_that_cannot_keep_the_object_from_pivoting_is_planned_without_th
     q1 = kin.ik(make_pose(t=[0.0, -0.15, 0.0]) @ T0, q0)
     assert not scene.collisions(q0) and not scene.collisions(q1)
     planner = executor.Planner(kin, limits, scene, executor.ExecutorConfig(
-        sampling=executor.SamplingConfig(timeout=0.2)))
+        sampling=executor.SamplingConfig(states=2_000)))
     lever = 0.1  # m: a bottle held at its neck
     traj, kept = planner.carry(q0, q1, lever=lever)
     assert kept and np.allclose(traj.q[-1], q1, atol=1e-6)
@@ -665,13 +689,13 @@ def test_an_object_held_near_its_centroid_gets_a_short_search_for_a_carry_that_k
     real = executor.plan_joint_path
 
     def spy(scene_, a, b, ignore=(), config=executor.SamplingConfig(), allowed=None):
-        budgets.append((config.timeout, allowed is not None))
+        budgets.append((config.states, allowed is not None))
         return real(scene_, a, b, ignore, config, allowed)
 
     monkeypatch.setattr(executor, "plan_joint_path", spy)
-    config = executor.ExecutorConfig(sampling=executor.SamplingConfig(timeout=0.5))
+    config = executor.ExecutorConfig(sampling=executor.SamplingConfig(states=5_000))
     planner = executor.Planner(kin, limits, scene, config)
-    for lever, budget, noted in ((0.04, config.short_lever_search, False), (0.11, 0.5, True)):
+    for lever, budget, noted in ((0.04, config.short_lever_search, False), (0.11, 5_000, True)):
         budgets.clear()
         traj, kept = planner.carry(q0, q1, lever=lever)
         assert budgets[0] == (budget, True) and kept is not noted

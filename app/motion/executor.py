@@ -56,7 +56,7 @@ class ExecutorConfig:
     carry_pivot: float = 45.0  # degrees gravity may turn about the fingers' axis on the carry (`held_without_pivot`)
     pivot_lever: float = 0.065  # m: a held object's centroid this far from the fingers' axis or farther: the planner's full
     # search for a carry that keeps it from pivoting, else a short one:
-    short_lever_search: float = 0.2  # s of constrained search for an object held nearer its centroid
+    short_lever_search: int = 1_200  # states of constrained search for an object held nearer its centroid (about 0.2 s)
     joint_speed: float = 1.05  # rad/s on transits (ur_rtde's moveJ default)
     joint_acceleration: float = 1.4  # rad/s^2
     line_speed: float = 0.15  # m/s on straight lines
@@ -146,7 +146,7 @@ class Planner:
         so. A mug held at its rim (4-5 cm) mostly rides such swings (1-4 degrees), once turned 24: its
         search is short (`short_lever_search`) and any transit is taken without a word."""
         short = lever < self.config.pivot_lever
-        search = replace(self.config.sampling, timeout=self.config.short_lever_search) if short else None
+        search = replace(self.config.sampling, states=self.config.short_lever_search) if short else None
         try:
             return self.transit(q0, q1, "carry", ignore, held_without_pivot(self.kin, q0, q1, self.config.carry_pivot),
                                 search), True
