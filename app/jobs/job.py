@@ -268,7 +268,7 @@ def _place(job: JobContext, planner: Planner, plan, sent: np.ndarray) -> None:
         _let_go(job, released, held)
     with job.stage("retreat"):
         if short:  # let go off the planned place: the way out is planned from there
-            leave = planner.leave(job.arm.getActualQ(), released)
+            leave = planner.leave(job.arm.getActualQ(), released, job.t.fixture)
         else:
             back_to_start(job.arm, plan.segment("retreat"), tolerance)  # letting go may have pushed the wrist
             leave = [plan.segment(name) for name in ("retreat", "clear", "home")]

@@ -270,25 +270,33 @@ class Planner:
             home = self.transit(clear.end, np.asarray(c.home_q), "home", ignore=(OBJECT,))
         return [carry, place, retreat, clear, home], [] if kept else [CARRY_MAY_PIVOT]
 
-    def _retreat_and_clear(self, q: np.ndarray, T_place: np.ndarray) -> tuple[JointTrajectory, JointTrajectory]:
+    def _retreat_and_clear(self, q: np.ndarray, T_place: np.ndarray,
+                           touching: tuple[str, ...] = ()) -> tuple[JointTrajectory, JointTrajectory]:
         """From a place at q (the TCP at T_place): the first retreat back along the tool's axis (or one
-        of its alternatives) from whose end a line straight up works too, and that line."""
+        of its alternatives) from whose end a line straight up works too, and that line; `touching`:
+        obstacles the retreat itself may start on."""
         c = self.config
         backs = line_offsets(np.array([0.0, 0.0, -1.0]), c.retreat_distance, c)  # in the TCP frame at the place
 
         def retreat_and_clear(T_retreat: np.ndarray):
-            retreat = self.line(q, T_retreat, "retreat", (OBJECT,))
+            retreat = self.line(q, T_retreat, "retreat", (OBJECT, *touching))
             T_clear = self.kin.fk(retreat.end)
             T_clear[2, 3] += c.lift_height
             return retreat, self.line(retreat.end, T_clear, "clear", (OBJECT,))
 
         return first_that_works([T_place @ make_pose(t=back) for back in backs], retreat_and_clear)
 
-    def leave(self, q: np.ndarray, released: float) -> list[JointTrajectory]:
+    def leave(self, q: np.ndarray, released: float, fixture: str) -> list[JointTrajectory]:
         """retreat, clear, home from where the object was let go at q (the fingers `released` m apart),
-        planned there and then: a place line that a contact cut short ends off its planned place."""
+        planned there and then: a place line that a contact cut short ends off its planned place, the
+        fingers maybe on the `fixture` it met (then the retreat may start on it: mug 31's finger was
+        within the scene's margin of the rack)."""
+        T = self.kin.fk(q)
         with self.scene.fingers(released):
-            retreat, clear = self._retreat_and_clear(q, self.kin.fk(q))
+            try:
+                retreat, clear = self._retreat_and_clear(q, T)
+            except NoIKSolution:
+                retreat, clear = self._retreat_and_clear(q, T, touching=(fixture,))
             return [retreat, clear, self.transit(clear.end, np.asarray(self.config.home_q), "home", ignore=(OBJECT,))]
 
     def _first_line(self, q: np.ndarray, targets: list[np.ndarray], label: str) -> JointTrajectory:
