@@ -63,8 +63,9 @@ def search_place(job: JobContext, T_pre: np.ndarray, T_place: np.ndarray, met: f
     """The place line shifted about its nominal one (the module's docstring) until a shifted line gets
     within `PLACE_ARRIVED` of its end: how far short it stopped; JobFailed, the arm at rest at the
     pre-place, when none does."""
+    offsets = search_offsets(T_place[:3, 3] - T_pre[:3, 3])
     tried = np.zeros(3)  # the offset of the line that last met something
-    for offset in search_offsets(T_place[:3, 3] - T_pre[:3, 3]):
+    for offset in offsets:
         _move(job, _moved(T_pre, tried), "backing off to the pre-place")  # back along the line that met it
         _move(job, _moved(T_pre, offset), "the move aside")
         tried = offset
@@ -84,7 +85,7 @@ def search_place(job: JobContext, T_pre: np.ndarray, T_place: np.ndarray, met: f
     _move(job, _moved(T_pre, tried), "backing off to the pre-place")
     _move(job, T_pre, "the move back")
     raise JobFailed(f"place: the held object met something {1000 * met:.0f} mm before its place ({why}), "
-                    f"and on each of {len(search_offsets(T_place[:3, 3] - T_pre[:3, 3]))} lines beside it")
+                    f"and on each of {len(offsets)} lines beside it")
 
 
 def search_offsets(direction: np.ndarray) -> list[np.ndarray]:

@@ -34,7 +34,7 @@ from app.jobs.guarded import guarded_line, guarded_place
 from app.jobs.held_place import look_and_place
 from app.jobs.record import STAGES, GraspMissed, JobFailed, JobHooks, JobResult, check_held, ur
 from app.jobs.settings import JOB_IMITATION, JobConfig, looks_again
-from app.motion.executor import OBJECT, ExecutionError, FingerWidths, Planner, back_to_start, execute, reverse
+from app.motion.executor import OBJECT, FingerWidths, Planner, back_to_start, execute, reverse
 from app.motion.ik import reach_failure
 from app.motion.scene import PlanningScene
 from app.nift.imitate import use_threads

@@ -160,10 +160,10 @@ class PlanningScene:
         set_pose(self.client, self.ghost, T_base_tcp @ np.linalg.inv(self.geometry.T_tool0_tcp))
         return self._obstacles_near(self.ghost, ignore)
 
-    def _obstacles_near(self, body: int, ignore: tuple[str, ...]) -> list[str]:
-        """Obstacles (not in `ignore`) within the margin of a free body."""
+    def _obstacles_near(self, body: int, ignore: tuple[str, ...], box: np.ndarray | None = None) -> list[str]:
+        """Obstacles (not in `ignore`) within the margin of a free body (`box`: its box, when known)."""
         names, boxes = self._obstacle_boxes(ignore)
-        near = self._overlap(self._box(body), boxes)  # (O,)
+        near = self._overlap(self._box(body) if box is None else box, boxes)  # (O,)
         return [name for name, hit in zip(names, near)
                 if hit and p.getClosestPoints(body, self.obstacles[name], self.margin, physicsClientId=self.client)]
 
@@ -249,8 +249,9 @@ class PlanningScene:
             return []
         body, T_tcp_body = self.held
         set_pose(self.client, body, self.kinematics.fk(q) @ T_tcp_body)
-        found = [f"{HELD}-{name}" for name in self._obstacles_near(body, ignore)]
-        if not (self._overlap(boxes, self._box(body)) & self._arm).any():
+        box = self._box(body)
+        found = [f"{HELD}-{name}" for name in self._obstacles_near(body, ignore, box)]
+        if not (self._overlap(boxes, box) & self._arm).any():
             return found
         near = self._links_near(body)
         return found + [f"{HELD}-{link}" for link in ARM_LINKS if self.links[link] in near]
