@@ -27,6 +27,16 @@ class CellLayout:
         return make_pose(rotvec_to_matrix([0.0, 0.0, yaw]), [x, y, 0.0])
 
 
+FIXTURES = ("rack", "shelf")
+
+
+def fixture_meshes(layout: CellLayout) -> list:
+    """Every fixture's mesh (trimesh) in the base frame, where the layout stands it."""
+    from app.objects import fixture
+
+    return [fixture(name).mesh.copy().apply_transform(layout.fixture_pose(name)) for name in FIXTURES]
+
+
 def add_fixtures(client: int, layout: CellLayout, margin: float | None = None) -> dict[str, int]:
     """Build the rack and the shelf in a PyBullet client at their configured poses, their hulls grown
     by `margin` (m; None: Bullet's default); {name: body}."""
@@ -35,7 +45,7 @@ def add_fixtures(client: int, layout: CellLayout, margin: float | None = None) -
     from hardware.bullet import add_mesh
 
     bodies = {}
-    for name in ("rack", "shelf"):
+    for name in FIXTURES:
         mesh = fixture(name).mesh
         bodies[name] = add_mesh(client, visual_model(mesh), collision_model(mesh), layout.fixture_pose(name),
                                 rgba=(0.55, 0.4, 0.3, 1), margin=margin)

@@ -1,15 +1,18 @@
 """One RGB-D frame -> the object's point cloud in the robot base frame (Open3D for the geometry).
 
 Steps: back-project the valid depth pixels with the intrinsics and the (calibrated) camera pose,
-crop to the workspace box, remove the table plane (RANSAC), keep the largest DBSCAN cluster,
-remove statistical outliers, then resample to a fixed point count (farthest point sampling).
+crop to the workspace box, remove the table plane (RANSAC) and the points on known fixtures (their
+meshes at their poses), keep the largest DBSCAN cluster, remove statistical outliers, then resample
+to a fixed point count (farthest point sampling).
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Sequence
 
 import numpy as np
 import open3d as o3d
+import trimesh
 
 from hardware.gripper_geometry import GripperGeometry
 from hardware.interfaces import Frame
@@ -33,6 +36,7 @@ class PerceptionConfig:
     outlier_std_ratio: float = 2.0
     n_points: int = 1024
     seed: int = 0
+    known_margin: float = 0.015  # m: points this near a known fixture's surface are the fixture (noise: a few mm)
 
 
 def back_project(frame: Frame, T_base_cam: np.ndarray) -> np.ndarray:
@@ -96,12 +100,27 @@ def resample(points: np.ndarray, n: int, seed: int) -> np.ndarray:
     return np.concatenate([points, points[extra]])
 
 
-def object_points(frame: Frame, T_base_cam: np.ndarray, cfg: PerceptionConfig = PerceptionConfig()) -> np.ndarray:
-    """All the object's points (M, 3) in the base frame, before resampling, or a one-line ValueError."""
+def off_known(points: np.ndarray, known: Sequence[trimesh.Trimesh], margin: float) -> np.ndarray:
+    """The points (M, 3) farther than `margin` (m) from every known surface (meshes in the base frame):
+    what is left once a fixture the cell knows is taken out of the view."""
+    if not known or len(points) == 0:
+        return points
+    scene = o3d.t.geometry.RaycastingScene()
+    for mesh in known:
+        scene.add_triangles(o3d.core.Tensor(np.asarray(mesh.vertices, np.float32)),
+                            o3d.core.Tensor(np.asarray(mesh.faces, np.uint32)))
+    d = scene.compute_distance(o3d.core.Tensor(points.astype(np.float32))).numpy()  # (M,) to the nearest surface
+    return points[d > margin]
+
+
+def object_points(frame: Frame, T_base_cam: np.ndarray, cfg: PerceptionConfig = PerceptionConfig(),
+                  known: Sequence[trimesh.Trimesh] = ()) -> np.ndarray:
+    """All the object's points (M, 3) in the base frame, before resampling, or a one-line ValueError;
+    points on the `known` meshes (base frame: fixtures in view) are left out."""
     points = crop(back_project(frame, T_base_cam), cfg)
     if len(points) == 0:
         raise ValueError("no object in the workspace (no depth point inside the workspace box)")
-    points = remove_table(points, cfg)
+    points = off_known(remove_table(points, cfg), known, cfg.known_margin)
     if len(points) < cfg.cluster_min_points:
         raise ValueError("no object in the workspace (only the table is visible)")
     points = largest_cluster(points, cfg)

@@ -34,7 +34,8 @@ class Watch(SimHooks):
         self.widths = {**getattr(self, "widths", {}), label: self.cell.gripper.width}
         fixture = self.cell.fixtures[self.task.fixture]
         on = "on the fixture" if self.cell.world.in_contact(self.obj.body, fixture) else "off the fixture"
-        self.where = {**getattr(self, "where", {}), label: f"{on}, z {self.cell.world.pose(self.obj.body)[2, 3]:.3f}"}
+        x, y, z = self.cell.world.pose(self.obj.body)[:3, 3]
+        self.where = {**getattr(self, "where", {}), label: f"{on}, at ({x:.3f}, {y:.3f}, {z:.3f})"}
 
 
 def touched_when_stopped(arm: sim_arm.SimArm) -> list[str]:

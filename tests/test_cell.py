@@ -4,6 +4,7 @@ import dataclasses
 import numpy as np
 import pytest
 
+from app.jobs.settings import JobConfig
 from app.objects import generate, rack, semantics, shelf
 from app.perception import DEPTH_MAX, back_project, object_cloud, object_points
 from app.sim.cell import SimCell
@@ -54,6 +55,29 @@ def test_perception_names_bad_frames(cell):
         object_cloud(zero, cell.camera.T_base_cam)
     with pytest.raises(ValueError, match="depth image is"):
         object_cloud(dataclasses.replace(frame, depth=frame.depth[:10]), cell.camera.T_base_cam)
+
+
+def test_the_look_for_a_fallen_object_leaves_the_rack_out_and_finds_a_box_at_its_foot(cell):
+    """The wide crop of a look after a missed place (`JobConfig.fallen_perception`) takes in the rack;
+    with the rack's mesh at its pose known, the empty cell shows nothing and a box at the rack's foot
+    comes back as itself."""
+    wide = JobConfig().fallen_perception
+    rack_mesh = rack().mesh.copy().apply_transform(cell.config.fixture_pose("rack"))
+    frame = cell.camera.capture()
+    seen = object_points(frame, cell.camera.T_base_cam, wide)  # the rack is the largest cluster
+    assert np.linalg.norm(seen.mean(axis=0)[:2] - cell.config.fixture_pose("rack")[:2, 3]) < 0.05
+    with pytest.raises(ValueError, match="no object in the workspace"):
+        object_points(frame, cell.camera.T_base_cam, wide, [rack_mesh])
+    box = cell.world.add_box(BOX, (0.42, 0.29, BOX[2] / 2), mass=0.2)  # 1 cm from the rack's base plate, partly
+    cell.world.step(30)  # outside the first look's crop (y < 0.28)
+    try:
+        centre = cell.world.pose(box)[:3, 3]
+        points = object_points(cell.camera.capture(), cell.camera.T_base_cam, wide, [rack_mesh])
+    finally:
+        cell.world.remove(box)
+    assert abs(points[:, 2].max() - BOX[2]) < 0.004  # the box's top
+    assert points[:, 1].max() > 0.30  # beyond the first look's crop
+    assert np.all(np.abs(points[:, :2] - centre[:2]) < np.array(BOX[:2]) / 2 + 0.01)  # nothing of the rack
 
 
 def test_back_projection_is_open3ds_in_the_image_order_and_perception_repeats_itself(cell):

@@ -1,7 +1,7 @@
 """The job's own camera check after the release: new pixels must gather where the object was sent."""
 import numpy as np
 
-from app.jobs.check import new_points, placed
+from app.jobs.check import new_points, placed, sighting
 from hardware.interfaces import CameraIntrinsics, Frame
 
 K = CameraIntrinsics(width=64, height=48, fx=50.0, fy=50.0, cx=32.0, cy=24.0)
@@ -40,3 +40,16 @@ def test_placed_where_the_patch_is_and_not_placed_elsewhere_or_when_nothing_chan
     assert not placed(before, after, T, there + [0.5, 0.0, 0.0])[0]  # sent 50 cm aside: nothing new there
     ok, why = placed(before, before, T, there)
     assert not ok and why.startswith("0 new points")
+
+
+def test_a_crowded_ball_is_not_placed_but_not_absent_either():
+    """New points beside the patch (a mug swinging by the rack) fail the share test; the patch itself
+    is still there, so the job does not look for the object elsewhere (`Sighting.absent`)."""
+    before, after = _scene()
+    T = np.eye(4)
+    there = new_points(before, after, T, 0.02)
+    after.depth[8:40, 42:50] = 1.0  # a second patch, 0.21-0.5 m from the first one's centre
+    seen = sighting(before, after, T, there)
+    assert seen.inside == 144 and seen.around > 2 * 144  # the first patch alone in the ball, more beside it
+    assert not seen.placed() and not seen.absent()
+    assert sighting(before, after, T, there + [2.0, 0.0, 0.0]).absent()  # sent 2 m aside: nothing new there

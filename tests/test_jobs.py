@@ -165,6 +165,38 @@ def test_a_missed_grasp_is_detected_retried_after_a_second_look_and_recorded():
     assert "recover" in result.seconds and result.failed_stage is None
 
 
+class PutsTheObjectBackOnce(SimHooks):
+    """Once the object is first let go on the fixture, it is put back where it stood at the start: to
+    the camera, a place that missed (it fell somewhere else)."""
+
+    put_back = False
+
+    def keyframe(self, label: str) -> None:
+        if label == "start":
+            self.start = self.cell.world.pose(self.obj.body)
+        super().keyframe(label)
+        if label == "release" and not self.put_back:
+            self.cell.world.set_pose(self.obj.body, self.start)
+            self.put_back = True
+
+
+def test_a_place_the_camera_does_not_see_is_picked_and_placed_again():
+    result = _sim(JobSpec(task("bottle"), seed=0), hooks_type=PutsTheObjectBackOnce)
+    assert result.success, result.reason
+    assert [a["attempt"] for a in result.attempts] == [1, 2]
+    first, second = result.attempts
+    assert first["outcome"].startswith("place missed: 0 new points within") and second["outcome"] == "held"
+    assert np.allclose(first["grasp"], second["grasp"], atol=2e-3)  # back where it was: about the same oracle grasp
+    assert result.seen.startswith("placed:") and result.failed_stage is None
+
+
+def test_the_last_attempt_does_not_look_again_after_a_place_it_does_not_see():
+    result = _sim(JobSpec(task("bottle"), seed=0), JobConfig(method="teacher", attempts=1),
+                  hooks_type=PutsTheObjectBackOnce)
+    assert not result.success and result.failed_stage == "verify"
+    assert result.seen.startswith("not placed: 0 new points") and len(result.attempts) == 1
+
+
 class DropsTheObjectOnce(SimHooks):
     """Once the first lift is done (the hold confirmed), the fingers open: the object falls back to
     the table while the arm carries on."""

@@ -5,7 +5,7 @@ import pytest
 from app.motion.cartesian import MAX_JOINT_JUMP, line_path
 from app.motion.ik import IKConfig, NoIKSolution, reach_failure, solve
 from app.motion.scene import PlanningScene
-from app.motion.trajectory import path_timing, through_waypoints
+from app.motion.trajectory import path_timing, remainder, through_waypoints
 from app.sim.cell import CellConfig
 from hardware.gripper_geometry import GripperGeometry
 from hardware.interfaces import JointLimits
@@ -121,6 +121,23 @@ def test_a_straight_timed_transit_follows_the_joint_segments_the_planner_checked
     for (a, b), q in zip(zip(waypoints[:-1], waypoints[1:]), (traj.q[: middle + 1], traj.q[middle:])):
         s = (q - a) @ (b - a) / ((b - a) @ (b - a))  # (T,) how far along the segment
         assert len(q) > 20 and np.abs(a + s[:, None] * (b - a) - q).max() < 1e-6
+
+
+def test_the_rest_of_a_trajectory_runs_on_from_where_the_arm_stopped_to_its_end(limits):
+    """`remainder`: from a stop part way (at rest, a little off the path), along the rest of the path
+    to its end, at rest at both ends and within the joint limits; for a path well under way, nothing
+    of what was already done."""
+    rng = np.random.default_rng(3)
+    waypoints = [HOME_Q + rng.uniform(-1.0, 1.0, 6) * [1.0, 0.3, 0.5, 1.0, 0.2, 2.0] for _ in range(3)]
+    traj = through_waypoints(waypoints, limits, straight=True)
+    stop = traj.q[len(traj.q) // 3] + 1e-3
+    rest = remainder(traj, stop, limits)
+    np.testing.assert_allclose(rest.q[0], stop, atol=1e-9)
+    np.testing.assert_allclose(rest.end, traj.end, atol=1e-9)
+    assert np.abs(rest.qd[[0, -1]]).max() < 1e-9 and (np.abs(rest.qd) <= limits.velocity + 1e-6).all()
+    done = traj.q[: len(traj.q) // 3 - 5]  # (K, 6) already run
+    nearest_done = np.abs(rest.q[:, None, :] - done[None]).max(axis=2).min(axis=1)  # (T,)
+    assert nearest_done[5:].min() > 1e-3  # it does not go back over them
 
 
 def test_cartesian_approach_stays_on_the_straight_line(kin, limits, scene):

@@ -1,11 +1,14 @@
-"""The place line under contact detection and its search aside (app.jobs.guarded), on the simulated arm."""
+"""The place line under contact detection, its search aside and the guarded way out (app.jobs.guarded), on the
+simulated arm."""
 from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
-from app.jobs.guarded import PLACE_ARRIVED, SEARCH_RINGS, search_offsets, search_place
+from app.jobs.guarded import PLACE_ARRIVED, SEARCH_RINGS, guarded_leave, search_offsets, search_place
 from app.jobs.record import JobFailed
+from app.motion.executor import ExecutionError
+from app.motion.trajectory import joint_segment
 from hardware.kinematics import UR5Kinematics
 from hardware.robot_description import HOME_Q
 from hardware.se3 import make_pose, pose_to_ur, ur_to_pose
@@ -88,3 +91,37 @@ def test_a_contact_force_that_is_not_positive_is_refused_by_name(name):
 
     with pytest.raises(ValueError, match=f"{name} must be a positive force"):
         JobConfig(**{name: 0.0})
+
+
+@pytest.mark.parametrize("guarded", [True, False])
+def test_a_way_out_that_meets_something_stops_opens_fully_and_carries_on(guarded):
+    """A retreat 10 cm along the base's +y runs a finger (fingers 40 mm apart) into a bar that fully open
+    fingers straddle (the hung mug swinging into a finger). Guarded, the arm stops at rest, the gripper
+    opens fully and the arm carries on along the retreat and home as planned; unguarded, the same
+    retreat ends in a protective stop."""
+    world = SimWorld()
+    robot = SimRobot(world)
+    arm, gripper = SimArm(SimArmConfig(), robot), SimGripper(SimGripperConfig(), robot)
+    with world, arm, gripper:
+        assert arm.moveJ(HOME_Q)
+        gripper.open(width=0.04)
+        kin = UR5Kinematics(tcp_offset=ur_to_pose(arm.getTCPOffset()))
+        T0, q0 = ur_to_pose(arm.getActualTCPPose()), arm.getActualQ()
+        aside = T0.copy()
+        aside[1, 3] += 0.10
+        retreat = joint_segment(q0, kin.ik_nearest(aside, q0), arm.joint_limits, 0.05, 0.5, "retreat")  # slow: rigid
+        home = joint_segment(retreat.end, q0, arm.joint_limits, 0.3, 1.0, "home")
+        bar = T0[:3, 3] + 0.025 * T0[:3, 1] + [0.0, 0.07, 0.01]  # 14-36 mm along the fingers' axis, below the palm:
+        world.add_box((0.022, 0.02, 0.03), bar)  # a finger 20-32 mm out meets it, both 42-55 mm out straddle it
+        config = SimpleNamespace(leave_contact_force=30.0, executor=SimpleNamespace(end_tolerance=0.02))
+        job = SimpleNamespace(arm=arm, gripper=gripper, kin=kin, guards_hang=lambda: guarded, config=config,
+                              result=SimpleNamespace(notes=[]))
+        if not guarded:
+            with pytest.raises(ExecutionError, match="protective stop"):
+                guarded_leave(job, [retreat, home])
+            return
+        guarded_leave(job, [retreat, home])
+        assert not arm.isProtectiveStopped()
+        assert gripper.width == pytest.approx(gripper.stroke, abs=2e-3)
+        np.testing.assert_allclose(arm.getActualQ(), q0, atol=0.02)  # the retreat, then home, as planned
+        assert len(job.result.notes) == 1 and "opened fully" in job.result.notes[0]

@@ -46,12 +46,39 @@ def new_points(before: Frame, after: Frame, T_base_cam: np.ndarray, closer: floa
     return transform_points(T_base_cam, cam)
 
 
-def placed(before: Frame, after: Frame, T_base_cam: np.ndarray, expected: np.ndarray,
-           check: PlacedCheck = PlacedCheck()) -> tuple[bool, str]:
-    """(placed, why): whether the new points of `after` gather where the object was sent (`expected`, (N, 3))."""
+@dataclass(frozen=True)
+class Sighting:
+    """What the camera shows where the object was sent: new points within `radius` (m) of there, and within twice it."""
+
+    inside: int
+    around: int
+    radius: float
+
+    def placed(self, check: PlacedCheck = PlacedCheck()) -> bool:
+        """Enough new points in the ball, and most of those around it."""
+        return self.inside >= check.min_points and self.inside >= check.share * self.around
+
+    def absent(self, check: PlacedCheck = PlacedCheck()) -> bool:
+        """Too few new points in the ball for anything to stand there: the object is elsewhere. (A hung mug
+        that swings, or hides behind the rack, can fail the share test; it never leaves the ball empty.)"""
+        return self.inside < check.min_points
+
+    def why(self) -> str:
+        return (f"{self.inside} new points within {self.radius:.2f} m of where the object was sent, "
+                f"{self.around} within {2 * self.radius:.2f} m")
+
+
+def sighting(before: Frame, after: Frame, T_base_cam: np.ndarray, expected: np.ndarray,
+             check: PlacedCheck = PlacedCheck()) -> Sighting:
+    """The new points of `after` counted around where the object was sent (`expected`, (N, 3))."""
     c = expected.mean(axis=0)
     R = float(np.linalg.norm(expected - c, axis=1).max()) + check.slack
     d = np.linalg.norm(new_points(before, after, T_base_cam, check.closer) - c, axis=1)  # (K,)
-    inside, around = int((d < R).sum()), int((d < 2 * R).sum())
-    ok = inside >= check.min_points and inside >= check.share * around
-    return ok, f"{inside} new points within {R:.2f} m of where the object was sent, {around} within {2 * R:.2f} m"
+    return Sighting(int((d < R).sum()), int((d < 2 * R).sum()), R)
+
+
+def placed(before: Frame, after: Frame, T_base_cam: np.ndarray, expected: np.ndarray,
+           check: PlacedCheck = PlacedCheck()) -> tuple[bool, str]:
+    """(placed, why): whether the new points of `after` gather where the object was sent (`expected`, (N, 3))."""
+    seen = sighting(before, after, T_base_cam, expected, check)
+    return seen.placed(check), seen.why()

@@ -6,9 +6,11 @@ from functools import cached_property
 from typing import Callable
 
 import numpy as np
+import trimesh
 
 from app.jobs.record import JobHooks, JobResult, stage
 from app.jobs.settings import JobConfig, is_hang
+from app.layout import fixture_meshes
 from app.motion.place_line import above_peg, fixture_approach, peg_line_direction
 from app.motion.scene import PlanningScene
 from app.predict.candidates import Candidate
@@ -45,6 +47,7 @@ class JobContext:
     placer: Placer | None = None  # imitates the place again after the second look (None: no second look)
     first: Frame | None = None  # the first frame: the fixture without the object
     points: np.ndarray | None = None  # the last look's object points (M, 3) before resampling
+    fell: bool = False  # a place missed: looks cover the table around the fixture (`JobConfig.fallen_perception`)
 
     def stage(self, name: str):
         """Time stage `name` and turn its expected errors into JobFailed (`app.jobs.record.stage`)."""
@@ -63,11 +66,22 @@ class JobContext:
         e = self.config.executor
         return above_peg(self.T_base_fixture, self.t.fixture, e.peg_clearance, e.peg_short)
 
-    def searches_place(self) -> bool:
-        """Whether the place line is guarded and searched beside (`app.jobs.guarded`): a hang from a
-        predicted place, whose hole is a centimetre or two off; the oracle's exact hangs run as planned
-        (guarded, its resting mugs hung 45 of 50, not 47: a 30 N stop cut hangs short) and a shelf's
-        place line ends pressing on the shelf (a bottle that stood: 325 N)."""
+    @cached_property
+    def fixture_meshes(self) -> list[trimesh.Trimesh]:
+        """The cell's fixtures, their meshes in the base frame (taken out of a look for an object that fell)."""
+        return fixture_meshes(self.scene.layout)
+
+    def release_width(self, held: float) -> float:
+        """The fingers' opening (m) to let go of what they hold `held` wide: `JobConfig.release_clearance`
+        beyond it, within the stroke."""
+        return min(self.gripper.stroke, held + self.config.release_clearance)
+
+    def guards_hang(self) -> bool:
+        """Whether a hang's place line is guarded and searched beside (`app.jobs.guarded`), and its way out
+        guarded too: a hang from a predicted place, whose hole is a centimetre or two off and whose mug
+        may swing onto the peg as it is let go. The oracle's exact hangs run as planned (guarded, its
+        resting mugs hung 45 of 50, not 47: a 30 N stop cut hangs short) and a shelf's place line ends
+        pressing on the shelf (a bottle that stood: 325 N)."""
         return self.config.method != ORACLE and is_hang(self.t)
 
     def looks_for_hole(self) -> bool:

@@ -1,4 +1,5 @@
-"""Lines under contact detection: the approach, the place, and the search for the place (our addition).
+"""Lines under contact detection: the approach, the place, the search for the place and the way out of a
+hang (our addition).
 
 A line runs with the arm's contact detection on (ur_rtde's `startContactDetection`): a change of
 the force on the tool stops the arm at rest, rather than pressing on into a protective stop.
@@ -13,6 +14,9 @@ as a robot threads a peg into a hole (a search about the nominal line, as in ass
 
 for rings of radius r_k about the line, each run from its own pre-place (the pre-place shifted as
 much) under contact detection, until one gets within `PLACE_ARRIVED` of its end.
+
+Let go, the mug swings onto the peg, and may swing into the fingers that held it: the way out of a
+predicted hang is guarded too (`guarded_leave`).
 """
 from __future__ import annotations
 
@@ -21,6 +25,7 @@ import numpy as np
 from app.jobs.context import JobContext
 from app.jobs.record import JobFailed
 from app.motion.executor import ExecutionError, execute
+from app.motion.trajectory import remainder
 from hardware.se3 import make_pose, pose_to_ur
 
 PLACE_ARRIVED = 0.03  # m: a place line stopped by a contact this close to its place lets go there
@@ -57,6 +62,27 @@ def guarded_place(job: JobContext, place) -> bool:
         job.result.notes.append(f"place: the held object met the fixture {1000 * met:.0f} mm before its place; "
                                 "let go there")
     return True
+
+
+def guarded_leave(job: JobContext, leave: list) -> None:
+    """Retreat, clear and go home (`leave`: their trajectories). A predicted hang's way out (`JobContext.guards_hang`)
+    runs under contact detection: fingers that meet the mug they let go (NIFT's upright mugs 12, 29 and
+    44 were dragged into protective stops) stop the arm at rest, the gripper opens fully (2 cm more on
+    each side), and the arm carries on along the planned way out from where it stopped."""
+    tolerance = job.config.executor.end_tolerance
+    for i, segment in enumerate(leave):
+        if not job.guards_hang():
+            execute(job.arm, segment, tolerance)
+            continue
+        met, why = guarded_line(job, segment, job.config.leave_contact_force)
+        if met is not None:
+            job.gripper.open(width=job.gripper.stroke)
+            job.result.notes.append(f"{segment.label}: the fingers met something ({why}); opened fully and "
+                                    "carried on")
+            execute(job.arm, remainder(segment, job.arm.getActualQ(), job.arm.joint_limits), tolerance)
+            for rest in leave[i + 1:]:
+                execute(job.arm, rest, tolerance)
+            return
 
 
 def search_place(job: JobContext, T_pre: np.ndarray, T_place: np.ndarray, met: float, why: str) -> float:

@@ -24,7 +24,7 @@ def look_and_place(job: JobContext, planner: Planner, plan, chosen: Candidate, o
     no new one plans (or nothing was seen). Returns the plan to carry on with and where the object
     should end (`sent`)."""
     T_grasp, width = plan.T_base_grasp, job.gripper.width
-    widths = FingerWidths(width, width, width + job.config.release_clearance)
+    widths = FingerWidths(width, width, job.release_width(width))
     T_above = job.T_base_fixture_placed
     first = [chosen, *(c for c in options if c.grasp_rank == chosen.grasp_rank and c.place_rank != chosen.place_rank)]
     with job.stage("look"):

@@ -14,7 +14,9 @@ Our additions, as a person at the cell would work:
   again and the next candidate with another grasp is tried (re-imitated when the object moved),
   up to `JobConfig.attempts` grasps. Every attempt goes in the record;
 - after the release the camera checks that something new stands where the object was sent
-  (`app.jobs.check`); a cell without a judge of its own reports that as the job's verdict.
+  (`app.jobs.check`); a cell without a judge of its own reports that as the job's verdict. When it
+  sees nothing new there at all (the object fell off the fixture) and attempts are left, the job
+  looks for the object again and picks and places it again, as after a missed grasp.
 
 The settings are in `app.jobs.settings`, the record and the hooks in `app.jobs.record`, the place
 chosen after the second look in `app.jobs.held_place`.
@@ -26,13 +28,13 @@ from dataclasses import replace
 import numpy as np
 
 from app.categories import REVOLUTION
-from app.jobs.check import placed
+from app.jobs.check import sighting
 from app.jobs.choice import NoCandidate, choose, describe
 from app.jobs.clearance import gripper_clear
 from app.jobs.context import JobContext, Predictor
-from app.jobs.guarded import guarded_line, guarded_place
+from app.jobs.guarded import guarded_leave, guarded_line, guarded_place
 from app.jobs.held_place import look_and_place
-from app.jobs.record import STAGES, GraspMissed, JobFailed, JobHooks, JobResult, check_held, ur
+from app.jobs.record import STAGES, GraspMissed, JobFailed, JobHooks, JobResult, PlaceMissed, check_held, ur
 from app.jobs.settings import JOB_IMITATION, JobConfig, looks_again
 from app.motion.executor import OBJECT, FingerWidths, Planner, back_to_start, execute, reverse
 from app.motion.ik import reach_failure
@@ -104,6 +106,7 @@ def _run(job: JobContext) -> None:
     planner = Planner(job.kin, job.arm.joint_limits, job.scene, job.config.executor)
     options, seen = None, None
     for attempt in range(1, job.config.attempts + 1):
+        last = attempt == job.config.attempts
         cloud = _observe(job)
         if options is None or np.linalg.norm(cloud.mean(axis=0) - seen) > MOVED:
             options = _imitate(job, cloud)
@@ -117,7 +120,7 @@ def _run(job: JobContext) -> None:
             _carry(job, plan)
         except GraspMissed as miss:
             job.result.attempts.append({"attempt": attempt, **describe(chosen, str(miss))})
-            if attempt == job.config.attempts:
+            if last:
                 raise JobFailed(f"{miss} (attempt {attempt} of {attempt})") from None
             _recover(job, planner, pick)
             options = [c for c in options if c.grasp_rank != chosen.grasp_rank] or None  # none left: imitate again
@@ -127,18 +130,25 @@ def _run(job: JobContext) -> None:
             raise
         job.result.attempts.append({"attempt": attempt, **describe(chosen, "held")})
         job.result.failed_stage = None
-        break
-    _place(job, planner, plan, sent)
+        try:
+            _place(job, planner, plan, sent, again=not last)
+            return
+        except PlaceMissed as miss:  # the arm is home, the gripper open: look for the object where it fell
+            job.result.attempts[-1]["outcome"] = str(miss)
+            job.scene.remove(OBJECT)
+            options, job.fell = None, True
 
 
 def _observe(job: JobContext) -> np.ndarray:
-    """Capture and perceive: the object's cloud (N, 3), added to the planning scene."""
+    """Capture and perceive: the object's cloud (N, 3), added to the planning scene; after a place
+    that missed, on the table around the fixture too, the fixture's points left out."""
     with job.stage("capture"):
         frame = job.camera.capture()
         job.first = job.first or frame
     with job.stage("perceive"):
-        job.points = object_points(frame, job.T_base_cam, job.config.perception)
-        cloud = resample(job.points, job.config.perception.n_points, job.config.perception.seed)
+        cfg = job.config.fallen_perception if job.fell else job.config.perception
+        job.points = object_points(frame, job.T_base_cam, cfg, job.fixture_meshes if job.fell else ())
+        cloud = resample(job.points, cfg.n_points, cfg.seed)
         job.scene.add_cloud(OBJECT, cloud, eye=job.T_base_cam[:3, 3])
     return cloud
 
@@ -161,7 +171,7 @@ def _plan(job: JobContext, planner: Planner, options: list, cloud: np.ndarray):
     while the object is held the fingers are modelled closed on what the cloud shows between them."""
     def widths(T_grasp: np.ndarray) -> FingerWidths:
         held, c, stroke = held_width(T_grasp, cloud), job.config, job.gripper.stroke
-        return FingerWidths(min(stroke, held + c.approach_clearance), held, min(stroke, held + c.release_clearance))
+        return FingerWidths(min(stroke, held + c.approach_clearance), held, job.release_width(held))
 
     T_above = job.T_base_fixture_placed
     if T_above is not job.T_base_fixture:  # a peg: placed clear of it; other fixtures' pairs stay bit for bit
@@ -253,18 +263,19 @@ def _recover(job: JobContext, planner: Planner, pick) -> None:
         execute(job.arm, planner.transit(job.arm.getActualQ(), home, "recover"), tolerance)
 
 
-def _place(job: JobContext, planner: Planner, plan, sent: np.ndarray) -> None:
-    """Place, release, retreat, verify (`sent`: the observed cloud moved where it should end)."""
+def _place(job: JobContext, planner: Planner, plan, sent: np.ndarray, again: bool = False) -> None:
+    """Place, release, retreat, verify (`sent`: the observed cloud moved where it should end); PlaceMissed
+    when the camera sees nothing new where the object was sent and the job may try `again`."""
     tolerance = job.config.executor.end_tolerance
     with job.stage("place"):
-        if job.searches_place():
+        if job.guards_hang():
             short = guarded_place(job, plan.segment("place"))
         else:
             execute(job.arm, plan.segment("place"), tolerance)
             short = False
     with job.stage("release"):
         held = job.gripper.width
-        released = min(job.gripper.stroke, held + job.config.release_clearance)
+        released = job.release_width(held)
         _let_go(job, released, held)
     with job.stage("retreat"):
         if short:  # let go off the planned place: the way out is planned from there
@@ -272,12 +283,13 @@ def _place(job: JobContext, planner: Planner, plan, sent: np.ndarray) -> None:
         else:
             back_to_start(job.arm, plan.segment("retreat"), tolerance)  # letting go may have pushed the wrist
             leave = [plan.segment(name) for name in ("retreat", "clear", "home")]
-        for segment in leave:
-            execute(job.arm, segment, tolerance)
+        guarded_leave(job, leave)
     with job.stage("verify"):
-        seen = placed(job.first, job.camera.capture(), job.T_base_cam, sent)
-        job.result.seen = f"{'placed' if seen[0] else 'not placed'}: {seen[1]}"
-        ok, why = job.hooks.verify(seen)
+        seen = sighting(job.first, job.camera.capture(), job.T_base_cam, sent)
+        job.result.seen = f"{'placed' if seen.placed() else 'not placed'}: {seen.why()}"
+        if again and seen.absent():
+            raise PlaceMissed(f"place missed: {seen.why()}; looked for the object again")
+        ok, why = job.hooks.verify((seen.placed(), seen.why()))
         if not ok:
             raise JobFailed(f"place failed: {why}")
         job.result.success, job.result.reason = True, why

@@ -39,6 +39,10 @@ class GraspMissed(JobFailed):
     """The gripper holds nothing after closing, after the lift, the second look or the carry."""
 
 
+class PlaceMissed(JobFailed):
+    """After the release the camera sees nothing new where the object was sent: it fell somewhere else."""
+
+
 def check_held(gripper: Gripper, during: str) -> None:
     """GraspMissed when the gripper no longer holds the object after the motion `during`."""
     if not gripper.object_detected:

@@ -50,15 +50,24 @@ class JobConfig:
     # (nothing held: every approach that reached its grasp changed it by 0 N; a finger on a mug's rim, 200-380 N)
     place_contact_force: float = 30.0  # N of change, held 20 ms, that stops a predicted hang's place line and starts
     # the search beside it (app.jobs.guarded)
+    leave_contact_force: float = 30.0  # N of change that stops a predicted hang's way out: the fingers met the mug
+    # they let go (it swings onto the peg); they open fully and the way out is planned again from there
     attempts: int = 3  # grasps tried before the job gives up
     most_plans: int = 6  # full plans tried per attempt before the plan stage gives up
     threads: int = 1  # torch threads: two threads beside one busy process took 2.5x as long as one (docs/jobs.md)
     perception: PerceptionConfig = PerceptionConfig()
+    fallen_perception: PerceptionConfig = PerceptionConfig(x_range=(0.15, 0.80), y_range=(-0.26, 0.55),
+                                                           z_range=(-0.03, 0.30))
+    # the look for an object that fell off its fixture: the table around the fixture too, the fixtures' own points
+    # left out; below the arm's elbow at home (it shows at x 0.27, z 0.35-0.40)
     imitation: ImitationConfig = JOB_IMITATION
     executor: ExecutorConfig = ExecutorConfig()
 
     def __post_init__(self) -> None:
-        for name in ("approach_contact_force", "place_contact_force"):
+        for name in ("approach_clearance", "release_clearance"):
+            if not getattr(self, name) >= 0:
+                raise ValueError(f"job setting {name} must be a width >= 0 in m, got {getattr(self, name)!r}")
+        for name in ("approach_contact_force", "place_contact_force", "leave_contact_force"):
             if not getattr(self, name) > 0:
                 raise ValueError(f"job setting {name} must be a positive force in N, got {getattr(self, name)!r}")
         for name in ("attempts", "most_plans", "threads"):

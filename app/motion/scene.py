@@ -54,6 +54,7 @@ class PlanningScene:
     def __init__(self, layout: CellLayout = CellLayout(), margin: float = 0.005,
                  geometry: GripperGeometry = GripperGeometry()) -> None:
         self._args = (layout, margin, geometry)
+        self.layout = layout  # where the fixtures stand
         self.margin = margin  # metres of clearance that count as a collision
         self.geometry = geometry
         self.finger_width = geometry.stroke  # m between the fingers' inner faces (`fingers`)

@@ -92,3 +92,15 @@ def path_timing(q_path: np.ndarray, length: float, limits: JointLimits, speed: f
     q = np.stack([np.interp(s, s_grid, q_path[:, j]) for j in range(q_path.shape[1])], axis=1)
     slope = np.stack([np.interp(s, s_grid[:-1], np.diff(q_path[:, j]) / np.diff(s_grid)) for j in range(q_path.shape[1])], axis=1)
     return JointTrajectory(times, q, slope * sd[:, None], label)
+
+
+def remainder(traj: JointTrajectory, q: np.ndarray, limits: JointLimits, speed: float = 0.5,
+              acceleration: float = 1.0) -> JointTrajectory:
+    """The rest of `traj` for an arm stopped at rest at q on (or near) its path: from q through the samples
+    after the nearest one, timed again from rest (`path_timing`, on the path's joint-space length)."""
+    k = int(np.abs(traj.q - q).max(axis=1).argmin())
+    path = np.vstack([q, traj.q[k + 1:]]) if k + 1 < len(traj.q) else np.vstack([q, traj.end])  # (K, D)
+    length = float(np.linalg.norm(np.diff(path, axis=0), axis=1).sum())
+    if length < 1e-9:
+        return JointTrajectory(np.zeros(2), np.vstack([q, q]), np.zeros((2, len(q))), traj.label)
+    return path_timing(path, length, limits, speed, acceleration, float(np.min(limits.jerk)), traj.label)
