@@ -14,6 +14,7 @@ import numpy as np
 import open3d as o3d
 import trimesh
 
+from app.nift.raycast import scene_of, unsigned_distance
 from hardware.gripper_geometry import GripperGeometry
 from hardware.interfaces import Frame
 
@@ -105,11 +106,7 @@ def off_known(points: np.ndarray, known: Sequence[trimesh.Trimesh], margin: floa
     what is left once a fixture the cell knows is taken out of the view."""
     if not known or len(points) == 0:
         return points
-    scene = o3d.t.geometry.RaycastingScene()
-    for mesh in known:
-        scene.add_triangles(o3d.core.Tensor(np.asarray(mesh.vertices, np.float32)),
-                            o3d.core.Tensor(np.asarray(mesh.faces, np.uint32)))
-    d = scene.compute_distance(o3d.core.Tensor(points.astype(np.float32))).numpy()  # (M,) to the nearest surface
+    d = unsigned_distance(scene_of(trimesh.util.concatenate(list(known))), points)  # (M,) to the nearest surface
     return points[d > margin]
 
 

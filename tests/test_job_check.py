@@ -1,7 +1,7 @@
 """The job's own camera check after the release: new pixels must gather where the object was sent."""
 import numpy as np
 
-from app.jobs.check import new_points, placed, sighting
+from app.jobs.check import new_points, sighting
 from hardware.interfaces import CameraIntrinsics, Frame
 
 K = CameraIntrinsics(width=64, height=48, fx=50.0, fy=50.0, cx=32.0, cy=24.0)
@@ -36,9 +36,10 @@ def test_placed_where_the_patch_is_and_not_placed_elsewhere_or_when_nothing_chan
     before, after = _scene()
     T = np.eye(4)
     there = new_points(before, after, T, 0.02)
-    assert placed(before, after, T, there)[0]
-    assert not placed(before, after, T, there + [0.5, 0.0, 0.0])[0]  # sent 50 cm aside: nothing new there
-    ok, why = placed(before, before, T, there)
+    assert sighting(before, after, T, there).placed()
+    assert not sighting(before, after, T, there + [0.5, 0.0, 0.0]).placed()  # sent 50 cm aside: nothing new there
+    seen = sighting(before, before, T, there)
+    ok, why = seen.placed(), seen.why()
     assert not ok and why.startswith("0 new points")
 
 

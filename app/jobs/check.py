@@ -80,10 +80,3 @@ def sighting(before: Frame, after: Frame, T_base_cam: np.ndarray, expected: np.n
     R = float(np.linalg.norm(expected - c, axis=1).max()) + check.slack
     d = np.linalg.norm(new_points(before, after, T_base_cam, check.closer) - c, axis=1)  # (K,)
     return Sighting(int((d < R).sum()), int((d < 2 * R).sum()), R)
-
-
-def placed(before: Frame, after: Frame, T_base_cam: np.ndarray, expected: np.ndarray,
-           check: PlacedCheck = PlacedCheck()) -> tuple[bool, str]:
-    """(placed, why): whether the new points of `after` gather where the object was sent (`expected`, (N, 3))."""
-    seen = sighting(before, after, T_base_cam, expected, check)
-    return seen.placed(check), seen.why()

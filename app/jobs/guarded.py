@@ -70,10 +70,11 @@ def guarded_leave(job: JobContext, leave: list) -> None:
     44 were dragged into protective stops) stop the arm at rest, the gripper opens fully (2 cm more on
     each side), and the arm carries on along the planned way out from where it stopped."""
     tolerance = job.config.executor.end_tolerance
-    for i, segment in enumerate(leave):
-        if not job.guards_hang():
+    if not job.guards_hang():
+        for segment in leave:
             execute(job.arm, segment, tolerance)
-            continue
+        return
+    for i, segment in enumerate(leave):
         met, why = guarded_line(job, segment, job.config.leave_contact_force)
         if met is not None:
             job.gripper.open(width=job.gripper.stroke)

@@ -141,7 +141,7 @@ def _run(job: JobContext) -> None:
 
 def _observe(job: JobContext) -> np.ndarray:
     """Capture and perceive: the object's cloud (N, 3), added to the planning scene; after a place
-    that missed, on the table around the fixture too, the fixture's points left out."""
+    that missed, on the table around the fixtures too, the fixtures' points left out."""
     with job.stage("capture"):
         frame = job.camera.capture()
         job.first = job.first or frame
@@ -286,10 +286,11 @@ def _place(job: JobContext, planner: Planner, plan, sent: np.ndarray, again: boo
         guarded_leave(job, leave)
     with job.stage("verify"):
         seen = sighting(job.first, job.camera.capture(), job.T_base_cam, sent)
-        job.result.seen = f"{'placed' if seen.placed() else 'not placed'}: {seen.why()}"
+        verdict = (seen.placed(), seen.why())
+        job.result.seen = f"{'placed' if verdict[0] else 'not placed'}: {verdict[1]}"
         if again and seen.absent():
-            raise PlaceMissed(f"place missed: {seen.why()}; looked for the object again")
-        ok, why = job.hooks.verify((seen.placed(), seen.why()))
+            raise PlaceMissed(f"place missed: {verdict[1]}; looked for the object again")
+        ok, why = job.hooks.verify(verdict)
         if not ok:
             raise JobFailed(f"place failed: {why}")
         job.result.success, job.result.reason = True, why

@@ -27,7 +27,7 @@ class JobHooks:
 
     def verify(self, seen: tuple[bool, str]) -> tuple[bool, str]:
         """(success, why) once the object has been let go on the fixture; `seen` is the job's own
-        camera check (`app.jobs.check.placed`), which this default reports."""
+        camera check (`app.jobs.check.Sighting.placed` and `why`), which this default reports."""
         return seen
 
 

@@ -51,7 +51,7 @@ class JobConfig:
     place_contact_force: float = 30.0  # N of change, held 20 ms, that stops a predicted hang's place line and starts
     # the search beside it (app.jobs.guarded)
     leave_contact_force: float = 30.0  # N of change that stops a predicted hang's way out: the fingers met the mug
-    # they let go (it swings onto the peg); they open fully and the way out is planned again from there
+    # they let go (it swings onto the peg); they open fully and the arm carries on (app.jobs.guarded.guarded_leave)
     attempts: int = 3  # grasps tried before the job gives up
     most_plans: int = 6  # full plans tried per attempt before the plan stage gives up
     threads: int = 1  # torch threads: two threads beside one busy process took 2.5x as long as one (docs/jobs.md)
