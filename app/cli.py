@@ -11,6 +11,7 @@ import traceback
 from pathlib import Path
 
 from app import __version__
+from app.failures import CellFailure
 from app.commands import (bench, bench_cell, bench_field, bench_geometry, bench_imitation, bench_jobs, bench_net,
                           calibrate, capture, devices, imitate, make_data, objects, run, serve, sim, teach, train)
 
@@ -39,7 +40,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 # What a user's input or files can cause: one line and exit 2. OSError covers the paths a user gives
 # (a directory where a file goes, a file where a directory goes, no permission, a full disk).
-EXPECTED = (ValueError, OSError)
+EXPECTED = (ValueError, OSError, CellFailure)  # bad input, a file, or what the cell could not do
 
 
 def log_dir() -> Path:

@@ -15,8 +15,10 @@ from typing import Any, TypeVar, get_type_hints
 T = TypeVar("T")
 
 
-def from_dict(cls: type[T], data: dict[str, Any], where: str = "") -> T:
-    """Build dataclass `cls` from a nested dict, starting from its defaults."""
+def from_dict(cls: type[T], data: dict[str, Any], where: str = "", base: T | None = None) -> T:
+    """Build dataclass `cls` from a nested dict, starting from `base` (default: its defaults); a nested
+    table starts from the field's own default (a preset such as the cell's imitation schedule)."""
+    base = cls() if base is None else base
     hints = get_type_hints(cls)
     names = {f.name for f in dataclasses.fields(cls)}
     values = {}
@@ -27,13 +29,13 @@ def from_dict(cls: type[T], data: dict[str, Any], where: str = "") -> T:
         if dataclasses.is_dataclass(hint):
             if not isinstance(value, dict):
                 raise ValueError(f"{where}{key!r} must be a table")
-            values[key] = from_dict(hint, value, where)
+            values[key] = from_dict(hint, value, where, getattr(base, key))
         elif isinstance(value, list):
             values[key] = tuple(tuple(v) if isinstance(v, list) else v for v in value)
         else:
             values[key] = _checked(hint, value, f"{where}{key!r}")
     try:
-        return dataclasses.replace(cls(), **values)
+        return dataclasses.replace(base, **values)
     except ValueError as exc:  # the dataclass's own range checks
         raise ValueError(f"{where}{exc}") from None
 

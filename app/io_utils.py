@@ -91,14 +91,18 @@ def read_npz(path: str | Path, fmt: str, kind: str, names: tuple[str, ...]) -> t
             header = json.loads(str(z["header"]))
             found = header.get("format") if isinstance(header, dict) else None
             if found != fmt:  # before the arrays: another version may name other ones
-                raise _WrongFormat(f"{path}: expected format {fmt!r}, found {found!r}")
+                raise WrongFormat(f"{path}: expected format {fmt!r}, found {found!r}", found)
             arrays = {name: z[name] for name in names}
+    except WrongFormat:
+        raise
     except NPY_ERRORS as exc:
-        if isinstance(exc, _WrongFormat):
-            raise ValueError(str(exc)) from None
         raise ValueError(f"{path} is not a readable {kind} file ({type(exc).__name__})") from None
     return header, arrays
 
 
-class _WrongFormat(ValueError):
-    """A readable file of another format or version (kept apart from corrupt-file errors)."""
+class WrongFormat(ValueError):
+    """A readable file of another format or version (`found`: the format its header names)."""
+
+    def __init__(self, message: str, found: object) -> None:
+        super().__init__(message)
+        self.found = found

@@ -14,6 +14,7 @@ import numpy as np
 import open3d as o3d
 import trimesh
 
+from app.failures import BadFrame, ObjectNotSeen
 from app.nift.raycast import scene_of, unsigned_distance
 from hardware.gripper_geometry import GripperGeometry
 from hardware.interfaces import Frame
@@ -47,11 +48,11 @@ def back_project(frame: Frame, T_base_cam: np.ndarray) -> np.ndarray:
     depth = np.asarray(frame.depth)
     K = frame.intrinsics
     if depth.shape != (K.height, K.width):
-        raise ValueError(f"depth image is {depth.shape}, intrinsics say {(K.height, K.width)}")
+        raise BadFrame(f"depth image is {depth.shape}, intrinsics say {(K.height, K.width)}")
     if np.isnan(depth).any():
-        raise ValueError("depth image contains NaN (a driver should report invalid depth as 0)")
+        raise BadFrame("depth image contains NaN (a driver should report invalid depth as 0)")
     if not (depth > 0).any():
-        raise ValueError("depth image has no valid pixel (all 0)")
+        raise BadFrame("depth image has no valid pixel (all 0)")
     # numpy, not Open3D's create_from_depth_image: that one returns the same points in a thread-timing
     # order, and farthest point sampling, RANSAC and DBSCAN downstream follow the order - a seed's job
     # was not the same twice in a process (docs/decisions.md, "Back-projection in pixel order")
@@ -87,7 +88,7 @@ def largest_cluster(points: np.ndarray, cfg: PerceptionConfig) -> np.ndarray:
     pcd = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(points))
     labels = np.asarray(pcd.cluster_dbscan(cfg.cluster_eps, cfg.cluster_min_points))
     if (labels < 0).all():
-        raise ValueError("no object in the workspace (no cluster after removing the table)")
+        raise ObjectNotSeen("no object in the workspace (no cluster after removing the table)")
     biggest = np.bincount(labels[labels >= 0]).argmax()
     return points[labels == biggest]
 
@@ -112,14 +113,14 @@ def off_known(points: np.ndarray, known: Sequence[trimesh.Trimesh], margin: floa
 
 def object_points(frame: Frame, T_base_cam: np.ndarray, cfg: PerceptionConfig = PerceptionConfig(),
                   known: Sequence[trimesh.Trimesh] = ()) -> np.ndarray:
-    """All the object's points (M, 3) in the base frame, before resampling, or a one-line ValueError;
+    """All the object's points (M, 3) in the base frame, before resampling, or a one-line PerceptionFailure;
     points on the `known` meshes (base frame: fixtures in view) are left out."""
     points = crop(back_project(frame, T_base_cam), cfg)
     if len(points) == 0:
-        raise ValueError("no object in the workspace (no depth point inside the workspace box)")
+        raise ObjectNotSeen("no object in the workspace (no depth point inside the workspace box)")
     points = off_known(remove_table(points, cfg), known, cfg.known_margin)
     if len(points) < cfg.cluster_min_points:
-        raise ValueError("no object in the workspace (only the table is visible)")
+        raise ObjectNotSeen("no object in the workspace (only the table is visible)")
     points = largest_cluster(points, cfg)
     pcd = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(points))
     pcd, _ = pcd.remove_statistical_outlier(cfg.outlier_neighbors, cfg.outlier_std_ratio)
@@ -127,7 +128,7 @@ def object_points(frame: Frame, T_base_cam: np.ndarray, cfg: PerceptionConfig = 
 
 
 def object_cloud(frame: Frame, T_base_cam: np.ndarray, cfg: PerceptionConfig = PerceptionConfig()) -> np.ndarray:
-    """The object's cloud (cfg.n_points, 3) in the base frame, or a one-line ValueError."""
+    """The object's cloud (cfg.n_points, 3) in the base frame, or a one-line PerceptionFailure."""
     return resample(object_points(frame, T_base_cam, cfg), cfg.n_points, cfg.seed)
 
 
@@ -137,13 +138,13 @@ def held_object_cloud(frame: Frame, T_base_cam: np.ndarray, T_base_tcp: np.ndarr
     """The points (M, 3), base frame, of an object held in the gripper at T_base_tcp: those within
     `radius` of `near` (where the object should be), less the gripper's own (its boxes at the TCP
     pose, fingers `width` apart, grown by `margin`), the largest cluster, outliers removed; a
-    one-line ValueError when nothing is left."""
+    one-line PerceptionFailure when nothing is left."""
     points = back_project(frame, T_base_cam)
     points = points[np.linalg.norm(points - near, axis=1) < radius]
     local = (points - T_base_tcp[:3, 3]) @ T_base_tcp[:3, :3]  # (M, 3) TCP frame
     points = points[~geometry.contains(local, width, margin)]
     if len(points) < cfg.cluster_min_points:
-        raise ValueError(f"the held object is not in view ({len(points)} points near it)")
+        raise ObjectNotSeen(f"the held object is not in view ({len(points)} points near it)")
     points = largest_cluster(points, cfg)
     pcd = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(points))
     pcd, _ = pcd.remove_statistical_outlier(cfg.outlier_neighbors, cfg.outlier_std_ratio)

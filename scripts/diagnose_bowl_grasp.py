@@ -21,6 +21,7 @@ from app.bench.report import summarise
 from app.nift.imitate import ImitationConfig, imitate
 from app.nift.template import build_template
 from app.objects import split
+from app.predict.config import PredictConfig
 from app.predict.predict import predict
 from app.tasks.anchors import anchor_mesh
 from app.tasks.library import DEMOS_DIR, task_demos
@@ -33,7 +34,7 @@ def offsets() -> None:
     for seed in split("bowl", "test")[:6]:
         mesh, T_obj, cloud, _ = target("bowl", seed, rng)
         a = teacher_grasp(mesh)  # object frame
-        b = invert(T_obj) @ predict(t, cloud, "ibs-nif").T_base_tcp
+        b = invert(T_obj) @ predict(t, cloud, PredictConfig(method="ibs-nif", imitation=ImitationConfig(), carried_grasps=False)).T_base_tcp
         print(seed, "teacher r %.3f z %.3f | predicted r %.3f z %.3f" % (
             np.hypot(*a[:2, 3]), a[2, 3], np.hypot(*b[:2, 3]), b[2, 3]), flush=True)
 

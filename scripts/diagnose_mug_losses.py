@@ -14,13 +14,13 @@ import sys
 
 import numpy as np
 
-from app.jobs.job import JOB_IMITATION
+from app.predict.config import CELL_IMITATION
 from app.nift.imitate import imitate, losses_at
 from app.perception import object_cloud
 from app.predict.carried_grasps import medoid
 from app.predict.feasibility import demo_carries
 from app.sim.cell import CellConfig, SimCell
-from app.sim.jobs import reset_arm, spawn_test_object, teacher_predictor
+from app.sim.jobs import reset_arm, spawn_test_object, oracle_predictor
 from app.tasks.library import DEMOS_DIR, task_demos, task_templates
 from app.tasks.task import task
 from hardware.se3 import invert, make_pose, rotvec_to_matrix
@@ -44,14 +44,14 @@ def main(seeds: int) -> None:
             cell.camera.reseed(np.random.SeedSequence(seed).spawn(1)[0])
             obj = spawn_test_object(cell.world, t, "upright", np.random.default_rng(seed))
             cloud = object_cloud(cell.camera.capture(), T_cam)
-            oracle = teacher_predictor(cell, obj, t)(cloud)
+            oracle = oracle_predictor(cell, obj, t)(cloud)
             T_obj = cell.world.pose(obj.body)
             rim = losses_at(templates["grasp"], cloud, turned(T_obj, oracle.T_base_tcp, np.arange(0, 360, 45)),
-                            JOB_IMITATION)
-            best = imitate(templates["grasp"], cloud, JOB_IMITATION).candidate_losses[0]
+                            CELL_IMITATION)
+            best = imitate(templates["grasp"], cloud, CELL_IMITATION).candidate_losses[0]
             turns = np.arange(-180, 180, 30)
             places = turned(T_obj, oracle.T_base_tcp, turns) @ np.linalg.inv(C)
-            place = losses_at(templates["place"], cloud, places, JOB_IMITATION)
+            place = losses_at(templates["place"], cloud, places, CELL_IMITATION)
             print(f"seed {seed}: grasp loss at the oracle's rim {rim.min():.1f}-{rim.max():.1f}, NIFT's best {best:.1f}; "
                   f"place loss lowest at turn {180 + turns[np.argmin(place)]} deg (the demos': 180; "
                   f"there {place[turns == 0][0]:.1f}, range {place.min():.1f}-{place.max():.1f})", flush=True)

@@ -17,12 +17,13 @@ from pathlib import Path
 
 import numpy as np
 
-from app.jobs.job import JOB_IMITATION, JobConfig
+from app.jobs.job import JobConfig
+from app.predict.config import PredictConfig
 from app.motion.scene import PlanningScene
 from app.predict.predict import predict
 from app.sim.calibration import ensure_calibration
 from app.sim.cell import CellConfig, SimCell
-from app.sim.jobs import JobSpec, run_sim_job, teacher_predictor
+from app.sim.jobs import JobSpec, run_sim_job, oracle_predictor
 from app.sim.judges import judge_place, judged_copy
 from app.tasks.task import task
 
@@ -54,9 +55,8 @@ def main() -> None:
 
                 def predictor(cloud: np.ndarray):
                     top = float(cloud[:, 2].max())
-                    pred = predict(t, cloud, "nift", T_rack, None, JOB_IMITATION, nif=args.fields,
-                                   carried_grasps=True)
-                    oracle = teacher_predictor(cell, obj, t)(cloud)
+                    pred = predict(t, cloud, PredictConfig(fields=args.fields), T_rack)
+                    oracle = oracle_predictor(cell, obj, t)(cloud)
                     pairs = pred.candidates[:CANDIDATES]
                     print(json.dumps({"seed": seed, "oracle_grasp": grasp_figures(oracle.T_base_tcp, top),
                                       "nift_grasps": [grasp_figures(c.T_base_tcp, top) for c in pairs],

@@ -59,7 +59,7 @@ parser.add_argument("--release-clearance", type=float, default=None)
 parser.add_argument("--approach-clearance", type=float, default=None)
 parser.add_argument("--calibration", type=Path, default=None, help="camera calibration file (calibrated first if missing)")
 args = parser.parse_args()
-job = JobConfig(method=args.method)
+job = JobConfig.of(args.method)
 if args.peg_clearance is not None:
     job = replace(job, executor=replace(job.executor, peg_clearance=args.peg_clearance))
 for name in ("release_clearance", "approach_clearance"):

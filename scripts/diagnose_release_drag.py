@@ -89,7 +89,7 @@ with SimCell(config) as cell:
     scene = PlanningScene(config)
     T_cam = np.array(cell.camera.config.T_base_cam) if args.calibration is None else ensure_calibration(cell, args.calibration)
     try:
-        result = run_sim_job(cell, scene, T_cam, JobSpec(task(args.task), args.seed), JobConfig(method=args.method),
+        result = run_sim_job(cell, scene, T_cam, JobSpec(task(args.task), args.seed), JobConfig.of(args.method),
                              hooks_type=Watch)
     finally:
         scene.close()

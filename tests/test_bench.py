@@ -27,7 +27,7 @@ def test_oracle_scores_high_and_wrong_poses_score_zero(tmp_path, monkeypatch):
             assert oracle[pose][ORACLE][t]["overall"] >= 0.95, (pose, t, oracle[pose][ORACLE][t])
     assert all(oracle["upright"][ORACLE][t]["in_table"] == 0.0 for t in config.tasks)  # the teacher grasps from above
 
-    true_teacher = trial_module.teacher_prediction
+    true_teacher = trial_module.oracle_prediction
 
     def wrong(t, mesh, scale, T_base_obj, T_base_fixture) -> Prediction:
         """The teacher's poses spoilt: the gripper 10 cm off along its approach axis, the object upside down."""
@@ -37,7 +37,7 @@ def test_oracle_scores_high_and_wrong_poses_score_zero(tmp_path, monkeypatch):
         return Prediction("wrong", good.T_base_tcp @ make_pose(t=[0.0, 0.0, -0.10]), invert(motion) @ T_base_fixture,
                           motion)
 
-    monkeypatch.setattr(trial_module, "teacher_prediction", wrong)
+    monkeypatch.setattr(trial_module, "oracle_prediction", wrong)
     config = BenchConfig(tasks=("mug", "bowl", "bottle"), poses=("upright",), methods=(ORACLE,), trials=2)
     bad = _summary_after(run(config, tmp_path / "wrong", workers=1), config)
     for t in config.tasks:

@@ -2,7 +2,7 @@
 carry like the demos, and the candidate set of a demo's own cloud."""
 import numpy as np
 
-from app.jobs.job import JOB_IMITATION
+from app.predict.config import CELL_IMITATION
 from app.nift.candidates import (HALF_TURN_Z, CandidateConfig, candidates,
                                  leaders)
 from app.nift.imitate import Imitation, imitate
@@ -73,7 +73,7 @@ def test_on_a_bowls_own_cloud_the_best_candidate_is_its_grasp():
     cloud = cloud @ T_base_obj[:3, :3].T + T_base_obj[:3, 3]
     truth = T_base_obj @ grasp_pose(mesh)
     template = build_template("gripper", anchor_mesh("gripper"), [{"cloud": cloud, "T_frame_anchor": truth}])
-    best = imitate(template, cloud, JOB_IMITATION).candidates[0]
+    best = imitate(template, cloud, CELL_IMITATION).candidates[0]
     d, a = min((pose_error(best @ S, truth) for S in GRASP), key=lambda e: e[0])
     assert d <= 0.005 and np.degrees(a) <= 5.0, (d, np.degrees(a))
 
@@ -84,9 +84,9 @@ def test_on_a_demo_cloud_the_shipped_bowl_template_gives_several_distinct_rim_gr
     directory = DEMOS_DIR / t.demos
     cloud = task_demos(directory)[3].cloud
     template = task_templates(t, directory)["grasp"]
-    result = imitate(template, cloud, JOB_IMITATION, feasible=grips_something(cloud))
+    result = imitate(template, cloud, CELL_IMITATION, feasible=grips_something(cloud))
     found = result.candidates
     assert len(found) >= 2, result.candidate_losses
-    _, follow = leaders(found, result.candidate_losses, JOB_IMITATION.candidates, GRASP)
+    _, follow = leaders(found, result.candidate_losses, CELL_IMITATION.candidates, GRASP)
     assert len(follow) == 0  # distinct
-    assert np.all(result.candidate_losses <= result.candidate_losses[0] * (1 + JOB_IMITATION.candidates.margin))
+    assert np.all(result.candidate_losses <= result.candidate_losses[0] * (1 + CELL_IMITATION.candidates.margin))

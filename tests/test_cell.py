@@ -4,6 +4,7 @@ import dataclasses
 import numpy as np
 import pytest
 
+from app.failures import BadFrame, ObjectNotSeen
 from app.jobs.settings import JobConfig
 from app.objects import generate, rack, semantics, shelf
 from app.perception import DEPTH_MAX, back_project, object_cloud, object_points
@@ -45,15 +46,15 @@ def test_box_comes_back_at_its_place_and_size(cell):
 
 def test_perception_names_bad_frames(cell):
     frame = cell.camera.capture()
-    with pytest.raises(ValueError, match="no object in the workspace"):
+    with pytest.raises(ObjectNotSeen, match="no object in the workspace"):
         object_cloud(frame, cell.camera.T_base_cam)  # empty table
     nan = dataclasses.replace(frame, depth=np.full_like(frame.depth, np.nan))
-    with pytest.raises(ValueError, match="NaN"):
+    with pytest.raises(BadFrame, match="NaN"):
         object_cloud(nan, cell.camera.T_base_cam)
     zero = dataclasses.replace(frame, depth=np.zeros_like(frame.depth))
-    with pytest.raises(ValueError, match="no valid pixel"):
+    with pytest.raises(BadFrame, match="no valid pixel"):
         object_cloud(zero, cell.camera.T_base_cam)
-    with pytest.raises(ValueError, match="depth image is"):
+    with pytest.raises(BadFrame, match="depth image is"):
         object_cloud(dataclasses.replace(frame, depth=frame.depth[:10]), cell.camera.T_base_cam)
 
 
@@ -66,7 +67,7 @@ def test_the_look_for_a_fallen_object_leaves_the_rack_out_and_finds_a_box_at_its
     frame = cell.camera.capture()
     seen = object_points(frame, cell.camera.T_base_cam, wide)  # the rack is the largest cluster
     assert np.linalg.norm(seen.mean(axis=0)[:2] - cell.config.fixture_pose("rack")[:2, 3]) < 0.05
-    with pytest.raises(ValueError, match="no object in the workspace"):
+    with pytest.raises(ObjectNotSeen, match="no object in the workspace"):
         object_points(frame, cell.camera.T_base_cam, wide, [rack_mesh])
     box = cell.world.add_box(BOX, (0.42, 0.29, BOX[2] / 2), mass=0.2)  # 1 cm from the rack's base plate, partly
     cell.world.step(30)  # outside the first look's crop (y < 0.28)

@@ -8,6 +8,7 @@ from app.nift.imitate import ImitationConfig, imitate
 from app.nift.raycast import scene_of
 from app.nift.template import build_template
 from app.objects import generate, rack
+from app.predict.config import PredictConfig
 from app.predict.predict import predict
 from app.tasks.anchors import anchor_mesh
 from app.tasks.task import task
@@ -187,14 +188,15 @@ def test_predict_asks_the_cell_about_the_grasps_it_ranks():
         asked.append(T.copy())
         return True
 
-    config = ImitationConfig(inits=8, iterations=80)
-    pred = predict(task("mug"), cloud, "ibs-nif", config=config, center=False, reachable=reachable)
+    config = PredictConfig(method="ibs-nif", imitation=ImitationConfig(inits=8, iterations=80), center=False,
+                           carried_grasps=False)
+    pred = predict(task("mug"), cloud, config, reachable=reachable)
     assert any(np.allclose(T, pred.T_base_tcp, atol=1e-9) for T in asked)
     assert not any(np.allclose(T, pred.T_base_tcp_place, atol=1e-6) for T in asked)
     # a cell that reaches nothing: no grasp is feasible, and the one found is the one found without
     # any predicate (pruned by loss alike; before, pruning kept arbitrary infeasible ones)
-    refused = predict(task("mug"), cloud, "ibs-nif", config=config, center=False, reachable=lambda T: False)
-    plain = predict(task("mug"), cloud, "ibs-nif", config=config, center=False, feasible=False)
+    refused = predict(task("mug"), cloud, config, reachable=lambda T: False)
+    plain = predict(task("mug"), cloud, replace(config, feasible=False))
     assert np.allclose(refused.T_base_tcp, plain.T_base_tcp)
 
 

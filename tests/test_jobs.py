@@ -8,7 +8,7 @@ import pytest
 from app.jobs.job import JobConfig
 from app.motion.scene import PlanningScene
 from app.sim.cell import CellConfig, SimCell
-from app.sim.jobs import JobSpec, SimHooks, run_series, run_sim_job, teacher_predictor
+from app.sim.jobs import JobSpec, SimHooks, run_series, run_sim_job, oracle_predictor
 from app.tasks.task import task
 from hardware.se3 import make_pose
 
@@ -18,7 +18,7 @@ def _run(config: CellConfig, spec: JobSpec, method: str, record=None):
         scene = PlanningScene(config)
         try:
             T_base_cam = np.array(cell.camera.config.T_base_cam)  # calibration is tested on its own
-            result = run_sim_job(cell, scene, T_base_cam, spec, JobConfig(method=method), record)
+            result = run_sim_job(cell, scene, T_base_cam, spec, JobConfig.of(method), record)
             return result, cell.arm.getActualQ(), cell.gripper.width, cell.arm.isProtectiveStopped()
         finally:
             scene.close()
@@ -73,7 +73,7 @@ def test_nift_hangs_a_mug_end_to_end_by_the_hole_it_sees(seed):
     assert np.allclose(q, CellConfig().arm.home_q, atol=0.02) and not stopped
 
 
-def _sim(spec: JobSpec, job: JobConfig = JobConfig(method="teacher"), config: CellConfig = CellConfig(), **kwargs):
+def _sim(spec: JobSpec, job: JobConfig = JobConfig.of("teacher"), config: CellConfig = CellConfig(), **kwargs):
     with SimCell(config) as cell:
         scene = PlanningScene(config)
         try:
@@ -89,7 +89,7 @@ def _oracle_after_a_moved_first(name: str, seed: int, moved):
     ended in a protective stop."""
     def predictor_of(cell):
         def with_a_moved_first(obj):
-            oracle = teacher_predictor(cell, obj, task(name))
+            oracle = oracle_predictor(cell, obj, task(name))
 
             def predict(cloud):
                 pred = oracle(cloud)
@@ -105,7 +105,7 @@ def _oracle_after_a_moved_first(name: str, seed: int, moved):
         scene = PlanningScene(config)
         try:
             result = run_sim_job(cell, scene, np.array(cell.camera.config.T_base_cam), JobSpec(task(name), seed=seed),
-                                 JobConfig(method="teacher"), predictor_of=predictor_of(cell))
+                                 JobConfig.of("teacher"), predictor_of=predictor_of(cell))
             return result, cell.arm.isProtectiveStopped()
         finally:
             scene.close()
@@ -191,7 +191,7 @@ def test_a_place_the_camera_does_not_see_is_picked_and_placed_again():
 
 
 def test_the_last_attempt_does_not_look_again_after_a_place_it_does_not_see():
-    result = _sim(JobSpec(task("bottle"), seed=0), JobConfig(method="teacher", attempts=1),
+    result = _sim(JobSpec(task("bottle"), seed=0), JobConfig.of("teacher", attempts=1),
                   hooks_type=PutsTheObjectBackOnce)
     assert not result.success and result.failed_stage == "verify"
     assert result.seen.startswith("not placed: 0 new points") and len(result.attempts) == 1
@@ -292,18 +292,21 @@ def test_a_pose_where_every_grasp_is_in_the_table_says_no_grasp_like_the_demos_e
     from contextlib import nullcontext
     from types import SimpleNamespace
 
-    from app.jobs.choice import NO_DEMO_LIKE_GRASP, NoCandidate, choose
+    from app.failures import NoCandidate, NoDemoLikeGrasp
+    from app.jobs.choice import NO_DEMO_LIKE_GRASP, choose
+    from app.motion.ik import Blocked
     from app.predict.candidates import Candidate
 
     planner = SimpleNamespace(scene=SimpleNamespace(geometry=SimpleNamespace(stroke=0.085),
                                                     fingers=lambda width: nullcontext()))
     pairs = [Candidate(make_pose(t=[0.5, 0.01 * k, 0.02]), np.eye(4), np.eye(4)) for k in range(3)]
-    in_table = lambda T, what: f"the gripper at the {what} hits rack, table"  # noqa: E731
-    with pytest.raises(NoCandidate, match=f"^{NO_DEMO_LIKE_GRASP} exists in this pose"):
+    in_table = lambda T, what: Blocked(f"the gripper at the {what} hits", ("rack", "table"))  # noqa: E731
+    with pytest.raises(NoDemoLikeGrasp, match=f"^{NO_DEMO_LIKE_GRASP} exists in this pose"):
         choose(planner, pairs, np.zeros(6), np.array([0, 0, -1.0]), in_table)
-    elsewhere = lambda T, what: f"the gripper at the {what} hits rack" if what == "place" else None  # noqa: E731
-    with pytest.raises(NoCandidate, match="^none of 3 candidates could be planned"):
+    elsewhere = lambda T, what: Blocked("table at the place", ("table",)) if what == "place" else None  # noqa: E731
+    with pytest.raises(NoCandidate, match="^none of 3 candidates could be planned") as raised:
         choose(planner, pairs, np.zeros(6), np.array([0, 0, -1.0]), elsewhere)
+    assert not isinstance(raised.value, NoDemoLikeGrasp)  # the grasps are clear; the places are not
 
 
 def test_a_job_that_looks_again_picks_a_reachable_grasp_whose_first_look_place_is_not():
@@ -312,7 +315,9 @@ def test_a_job_that_looks_again_picks_a_reachable_grasp_whose_first_look_place_i
     from contextlib import nullcontext
     from types import SimpleNamespace
 
-    from app.jobs.choice import PICK_ONLY, NoCandidate, choose
+    from app.failures import NoCandidate
+    from app.jobs.choice import PICK_ONLY, choose
+    from app.motion.ik import Blocked
     from app.predict.candidates import Candidate
 
     calls = []
@@ -324,15 +329,15 @@ def test_a_job_that_looks_again_picks_a_reachable_grasp_whose_first_look_place_i
     planner = SimpleNamespace(scene=SimpleNamespace(geometry=SimpleNamespace(stroke=0.085),
                                                     fingers=lambda width: nullcontext()), pick_place=pick_place)
     pairs = [Candidate(make_pose(t=[0.5, 0.01 * k, 0.02]), np.eye(4), np.eye(4), grasp_rank=k) for k in range(3)]
-    first_grasp_low = lambda T, what: (f"the gripper at the {what} hits rack" if what == "place" or T[1, 3] < 0.005  # noqa: E731
-                                       else None)
+    first_grasp_low = lambda T, what: (Blocked(f"the gripper at the {what} hits rack", ("rack",))  # noqa: E731
+                                       if what == "place" or T[1, 3] < 0.005 else None)
     with pytest.raises(NoCandidate):
         choose(planner, pairs, np.zeros(6), np.array([0, 0, -1.0]), first_grasp_low)
     choice = choose(planner, pairs, np.zeros(6), np.array([0, 0, -1.0]), first_grasp_low, pick_only=True)
     assert choice.candidate.grasp_rank == 1 and calls == [(pairs[1].T_base_tcp, None)]
     assert [t["outcome"].endswith("(quick test)") for t in choice.tried] == [True, True, True, False]
     assert choice.tried[-1]["outcome"] == PICK_ONLY and choice.tried[-1]["grasp_rank"] == 1
-    everything_low = lambda T, what: "the gripper at the grasp hits table"  # noqa: E731
+    everything_low = lambda T, what: Blocked("the gripper at the grasp hits table", ("table",))  # noqa: E731
     with pytest.raises(NoCandidate):
         choose(planner, pairs, np.zeros(6), np.array([0, 0, -1.0]), everything_low, pick_only=True)
 
@@ -345,7 +350,7 @@ def test_a_mug_hung_at_its_hang_drags_on_the_peg_only_when_bullet_thickens_the_h
     as it does placed `ExecutorConfig.peg_clearance` (12 mm) above and dropped."""
     from app.motion.executor import ExecutorConfig
 
-    at_hang = JobConfig(method="teacher", executor=ExecutorConfig(peg_clearance=0.0))
+    at_hang = JobConfig.of("teacher", executor=ExecutorConfig(peg_clearance=0.0))
     thick = replace(CellConfig(), world=replace(CellConfig().world, mesh_margin=0.001))
     assert not _sim(JobSpec(task("mug"), seed=5), at_hang, config=thick).success
     result = _sim(JobSpec(task("mug"), seed=5), at_hang)
@@ -361,7 +366,7 @@ def test_a_small_mug_is_approached_with_the_fingers_open_only_as_wide_as_the_rim
     `approach_clearance` the arm comes down, closes on the rim and lifts the mug (whether it then hangs
     is the place's matter)."""
     spec = JobSpec(task("mug"), seed=25)
-    wide = _sim(spec, JobConfig(method="teacher", approach_clearance=1.0))  # clipped to the stroke: fully open
+    wide = _sim(spec, JobConfig.of("teacher", approach_clearance=1.0))  # clipped to the stroke: fully open
     assert not wide.success and wide.failed_stage == "approach" and "the tool met something" in wide.reason
     result = _sim(spec)
     assert result.failed_stage not in ("approach", "grasp", "lift"), result.reason
@@ -395,7 +400,7 @@ def _series(seeds: list[int]) -> list[dict]:
         scene = PlanningScene(config)
         try:
             results = run_series(cell, scene, np.array(cell.camera.config.T_base_cam),
-                                 [JobSpec(task("mug"), seed) for seed in seeds], JobConfig(method="nift"))
+                                 [JobSpec(task("mug"), seed) for seed in seeds], JobConfig.of("nift"))
         finally:
             scene.close()
     records = [r.record() for r in results]

@@ -3,7 +3,8 @@ import numpy as np
 import pytest
 
 from app.motion.cartesian import MAX_JOINT_JUMP, line_path
-from app.motion.ik import IKConfig, NoIKSolution, reach_failure, solve
+from app.failures import NoIKSolution, NoPath, PathCollides
+from app.motion.ik import IKConfig, reach_failure, solve
 from app.motion.scene import PlanningScene
 from app.motion.trajectory import path_timing, remainder, through_waypoints
 from app.sim.cell import CellConfig
@@ -258,7 +259,7 @@ def test_the_search_budget_is_states_checked_not_seconds(kin, scene, monkeypatch
     stops after its states, long before its time cap."""
     import time
 
-    from app.motion.sampling import NoPath, SamplingConfig, plan_joint_path
+    from app.motion.sampling import SamplingConfig, plan_joint_path
 
     q0, q1, pillar = _pillar_between_two_reaches(kin)
     scene.add_cloud("pillar", pillar)
@@ -280,7 +281,7 @@ def test_the_search_budget_is_states_checked_not_seconds(kin, scene, monkeypatch
 def test_sampling_planner_refuses_a_colliding_goal_at_once_and_names_the_contact(kin, scene):
     import time
 
-    from app.motion.sampling import NoPath, plan_joint_path
+    from app.motion.sampling import plan_joint_path
 
     q0, q1, pillar = _pillar_between_two_reaches(kin)
     scene.add_cloud("pillar", pillar)
@@ -449,7 +450,7 @@ def test_a_blocked_approach_line_is_replaced_by_a_shorter_one_that_keeps_the_gra
     assert np.allclose(kin.fk(approach.end), plan.T_base_grasp, atol=1e-4)
     assert not any("box" in h for q in approach.q for h in collisions(q))
     only_default = replace(ExecutorConfig(), shorter=(), approach_cone=0.0)
-    with pytest.raises(NoIKSolution, match="approach: collision .*gripper_palm-box"):
+    with pytest.raises(PathCollides, match="approach: collision .*gripper_palm-box"):
         Planner(kin, limits, scene, only_default).pick_place(HOME_Q, T_grasp, T_place, np.array([0.0, 0.0, 1.0]))
 
 
@@ -649,7 +650,7 @@ def test_a_carry_that_cannot_keep_the_object_from_pivoting_is_planned_without_th
     assert kept and np.allclose(traj.q[-1], q1, atol=1e-6)
     ends_only = lambda kin_, a, b, extra: (lambda q: bool(np.allclose(q, a) or np.allclose(q, b)))  # noqa: E731
     monkeypatch.setattr(executor, "held_without_pivot", ends_only)  # nothing between the ends is allowed
-    with pytest.raises(NoIKSolution, match="constrained"):
+    with pytest.raises(NoPath, match="constrained"):
         planner.transit(q0, q1, "carry", allowed=ends_only(kin, q0, q1, 0.0))
     traj, kept = planner.carry(q0, q1, lever=lever)  # the constraint cannot be kept: planned as any transit
     assert not kept and np.allclose(traj.q[0], q0) and np.allclose(traj.q[-1], q1, atol=1e-6)

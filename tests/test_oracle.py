@@ -2,7 +2,7 @@
 import numpy as np
 
 from app.objects import generate
-from app.sim.oracle import grasp_turns, teacher_prediction
+from app.sim.oracle import grasp_turns, oracle_prediction
 from app.tasks.task import task
 from hardware.se3 import invert, make_pose, random_rotations
 
@@ -17,7 +17,7 @@ def test_turned_grasps_are_the_teachers_about_the_bottles_axis_with_one_place():
     t, mesh = task("bottle"), generate("bottle", 3)
     T_base_obj = make_pose(random_rotations(1, np.random.default_rng(0))[0], [0.5, 0.1, 0.1])
     T_base_fixture = make_pose(np.eye(3), [0.5, -0.45, 0.2])
-    pred = teacher_prediction(t, mesh, 1.0, T_base_obj, T_base_fixture, turns=12)
+    pred = oracle_prediction(t, mesh, 1.0, T_base_obj, T_base_fixture, turns=12)
     assert len(pred.candidates) == 12
     np.testing.assert_allclose(pred.candidates[0].T_base_tcp, pred.T_base_tcp)
     own = invert(T_base_obj) @ pred.T_base_tcp  # the teacher's grasp in the object's frame
@@ -29,4 +29,4 @@ def test_turned_grasps_are_the_teachers_about_the_bottles_axis_with_one_place():
         c_, s_ = np.cos(angle), np.sin(angle)
         Rz = np.array([[c_, -s_, 0], [s_, c_, 0], [0, 0, 1]])
         np.testing.assert_allclose(T_obj_tcp[:3, :3], Rz @ own[:3, :3], atol=1e-12)
-    assert teacher_prediction(t, mesh, 1.0, T_base_obj, T_base_fixture).candidates == []
+    assert oracle_prediction(t, mesh, 1.0, T_base_obj, T_base_fixture).candidates == []

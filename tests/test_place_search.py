@@ -6,8 +6,7 @@ import numpy as np
 import pytest
 
 from app.jobs.guarded import PLACE_ARRIVED, SEARCH_RINGS, guarded_leave, search_offsets, search_place
-from app.jobs.record import JobFailed
-from app.motion.executor import ExecutionError
+from app.failures import ContactStop, ProtectiveStop
 from app.motion.trajectory import joint_segment
 from hardware.kinematics import UR5Kinematics
 from hardware.robot_description import HOME_Q
@@ -78,7 +77,7 @@ def test_a_place_blocked_on_every_line_fails_at_rest_at_the_pre_place(job):
     T_pre, T_place = _line_down(job, z_pre=0.12, length=0.06)
     job.world.add_box((0.2, 0.2, 0.08), [T_place[0, 3], T_place[1, 3], 0.04])  # a block under all the lines
     assert job.arm.moveL(pose_to_ur(T_pre), 0.1)
-    with pytest.raises(JobFailed, match="on each of"):
+    with pytest.raises(ContactStop, match="on each of"):
         search_place(job, T_pre, T_place, 0.05, "a contact")
     assert not job.arm.isProtectiveStopped()
     assert np.linalg.norm(ur_to_pose(job.arm.getActualTCPPose())[:3, 3] - T_pre[:3, 3]) < 0.002
@@ -89,7 +88,7 @@ def test_a_place_blocked_on_every_line_fails_at_rest_at_the_pre_place(job):
 def test_a_contact_force_that_is_not_positive_is_refused_by_name(name):
     from app.jobs.settings import JobConfig
 
-    with pytest.raises(ValueError, match=f"{name} must be a positive force"):
+    with pytest.raises(ValueError, match=rf"^{name} must be in \(0, "):
         JobConfig(**{name: 0.0})
 
 
@@ -117,7 +116,7 @@ def test_a_way_out_that_meets_something_stops_opens_fully_and_carries_on(guarded
         job = SimpleNamespace(arm=arm, gripper=gripper, kin=kin, guards_hang=lambda: guarded, config=config,
                               result=SimpleNamespace(notes=[]))
         if not guarded:
-            with pytest.raises(ExecutionError, match="protective stop"):
+            with pytest.raises(ProtectiveStop, match="protective stop"):
                 guarded_leave(job, [retreat, home])
             return
         guarded_leave(job, [retreat, home])

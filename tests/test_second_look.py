@@ -3,6 +3,7 @@ the wrist turn of the second look, and the second look's fused cloud of a held m
 import numpy as np
 import pytest
 
+from app.failures import OutOfJointLimits
 from app.jobs.second_look import to_grasp_frame, view_q
 from app.nift.imitate import Imitation
 from app.predict.carried_grasps import (carried_grasps, carried_pairs,
@@ -73,7 +74,7 @@ def test_the_wrist_turns_within_its_limits_and_views_map_back_to_the_grasp():
     q = np.array([0.0, -1.0, 1.0, -1.0, -1.5, 5.0])
     assert view_q(q, np.pi, limits)[5] == pytest.approx(5.0 - np.pi)  # +pi would leave the limit
     assert view_q(q * 0, np.pi, limits)[5] == pytest.approx(np.pi)
-    with pytest.raises(ValueError, match="cannot turn"):
+    with pytest.raises(OutOfJointLimits, match="cannot turn"):
         view_q(q * 0, 13.0, limits)
     T_grasp, T_view = _poses(2, 3)
     points = np.random.default_rng(4).uniform(-0.1, 0.1, (20, 3))
@@ -93,7 +94,7 @@ def test_the_second_look_fuses_a_held_mug_onto_its_mesh_without_the_gripper(monk
     from app.jobs.job import JobConfig
     from app.motion.scene import PlanningScene
     from app.sim.cell import CellConfig, SimCell
-    from app.sim.jobs import JobSpec, SimHooks, run_sim_job, teacher_predictor
+    from app.sim.jobs import JobSpec, SimHooks, run_sim_job, oracle_predictor
     from app.tasks.task import task
 
     seen = {}
@@ -116,8 +117,8 @@ def test_the_second_look_fuses_a_held_mug_onto_its_mesh_without_the_gripper(monk
         scene = PlanningScene(config)
         try:
             run_sim_job(cell, scene, np.array(cell.camera.config.T_base_cam), JobSpec(task("mug"), seed=1),
-                        JobConfig(method="nift", second_look=True), hooks_type=Hooks,
-                        predictor_of=lambda obj: teacher_predictor(cell, obj, task("mug")))
+                        JobConfig.of("nift", second_look=True), hooks_type=Hooks,
+                        predictor_of=lambda obj: oracle_predictor(cell, obj, task("mug")))
         finally:
             scene.close()
     surface = trimesh.sample.sample_surface(seen["mesh"], 30000, seed=0)[0]

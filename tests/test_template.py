@@ -79,6 +79,7 @@ def test_templates_of_other_nif_weights_sit_beside_the_shipped_ones(tmp_path):
     from app.bench.runner import settings
     from app.nift.field import FieldConfig, NeuralField, save_field
     from app.nift.imitate import ImitationConfig
+    from app.predict.config import PredictConfig
     from app.predict.predict import predict
     from app.tasks.library import DEMOS_DIR, task_demos, task_templates, template_path
     from app.tasks.task import task
@@ -97,7 +98,8 @@ def test_templates_of_other_nif_weights_sit_beside_the_shipped_ones(tmp_path):
     with pytest.raises(ValueError, match="rebuild it"):
         load_template(path)  # checked against the shipped NIF: refused
     cloud = task_demos(demos)[0].cloud
-    pred = predict(t, cloud, "ibs-nif", directory=demos, config=ImitationConfig(inits=2, iterations=3), nif=weights)
+    pred = predict(t, cloud, PredictConfig(method="ibs-nif", demos=demos, fields=weights,
+                                           imitation=ImitationConfig(inits=2, iterations=3), carried_grasps=False))
     assert pred.T_base_tcp.shape == (4, 4)
     assert settings(BenchConfig(nif=str(weights)))["nif_id"] == field_id(weights)
     with pytest.raises(FileNotFoundError, match="no field weights at"):

@@ -21,6 +21,7 @@ from app.nift.imitate import ImitationConfig
 from app.nift.raycast import scene_of
 from app.objects import split
 from app.perception import resample
+from app.predict.config import PredictConfig
 from app.predict.predict import predict
 from app.sim.cell import WORKSPACE, CellConfig
 from app.sim.spawn import SCALE_RANGE
@@ -75,6 +76,7 @@ def run_imitation_benchmark(quick: bool = False, seed: int = 0, method: str = "n
     """Per task: median seconds per prediction, iterations, and median grasp / place errors."""
     cell = CellConfig()
     config = replace(config, seed=seed)
+    settings = PredictConfig(method=method, imitation=config, center=False, carried_grasps=False)
     n = 2 if quick else objects
     figures: dict = {"method": method, "objects_per_task": n, "prune_every": config.prune_every,
                      "explore_points": config.explore_points, "iterations": config.iterations,
@@ -86,7 +88,7 @@ def run_imitation_benchmark(quick: bool = False, seed: int = 0, method: str = "n
         rows, per_template = [], []
         for s in seeds:
             mesh, T_base_obj, cloud, scale = target(t.category, int(s), rng, cell)
-            pred = predict(t, cloud, method, cell.fixture_pose(t.fixture), config=config, center=False)
+            pred = predict(t, cloud, settings, cell.fixture_pose(t.fixture))
             g = grasp_error(t.category, T_base_obj, pred.T_base_tcp, T_base_obj @ teacher_grasp(mesh))
             goal = cell.fixture_pose(t.fixture) @ teacher_place(t, mesh, scale)
             p = place_error(t.fixture, pred.motion @ T_base_obj, goal)

@@ -10,7 +10,7 @@ import numpy as np
 
 from app.bench.memory import growth_across_refreshes, growth_mb_per_job, resident_mb
 from app.io_utils import write_json
-from app.jobs.choice import NO_DEMO_LIKE_GRASP
+from app.failures import INTERNAL_ERROR, NoDemoLikeGrasp
 from app.jobs.job import JobConfig, JobResult
 from app.motion.scene import PlanningScene
 from app.sim.cell import CellConfig, SimCell
@@ -27,8 +27,9 @@ def summarise(name: str, results: list[JobResult]) -> dict:
     """Figures of one task's series."""
     planned = [r for r in results if r.plan]
     wall = [sum(r.seconds.values()) for r in results]
-    failures = Counter(r.failed_stage for r in results if not r.success)
-    no_grasp = sum(r.failed_stage == "plan" and r.reason.startswith(NO_DEMO_LIKE_GRASP) for r in results)
+    failures = Counter(r.failed_stage for r in results if not r.success and r.failure_kind != INTERNAL_ERROR)
+    no_grasp = sum(r.failure_kind == NoDemoLikeGrasp.kind for r in results)
+    bugs = sum(r.failure_kind == INTERNAL_ERROR for r in results)
     possible = len(results) - no_grasp
     out = {
         f"{name}_success": f"{sum(r.success for r in results)}/{len(results)}",
@@ -49,6 +50,9 @@ def summarise(name: str, results: list[JobResult]) -> dict:
         out[f"{name}_second_look_moved_place"] = sum(_moved_place(k) for k in looked)
         out[f"{name}_picked_before_a_place"] = sum(bool(k.get("pick_only")) for k in looked)
     out[f"{name}_failures"] = dict(sorted(failures.items())) or "none"
+    out[f"{name}_failure_kinds"] = dict(sorted(Counter(r.failure_kind for r in results if not r.success
+                                                       and r.failure_kind != INTERNAL_ERROR).items())) or "none"
+    out[f"{name}_internal_errors"] = bugs  # bugs of ours, not failures of the cell: counted apart
     return out
 
 
@@ -76,7 +80,7 @@ def run_jobs_benchmark(jobs: int = 20, method: str = "nift", pose: str = "uprigh
         try:
             for name in tasks:
                 specs = [JobSpec(task(name), seed + i, pose) for i in range(jobs)]
-                results = run_series(cell, scene, T_cam, specs, JobConfig(method=method, second_look=second_look), each)
+                results = run_series(cell, scene, T_cam, specs, JobConfig.of(method, second_look=second_look), each)
                 figures.update(summarise(name, results))
                 every += [r.record() for r in results]
         finally:

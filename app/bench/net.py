@@ -60,9 +60,9 @@ def _paired_jobs(net: NetCell, local, t, method: str, seeds: list[int], T_base_c
                 start = time.perf_counter()
                 if where == "net":
                     [r] = run_remote_series(net, CellLayout(), t, [seed], "upright", T_base_cam,
-                                            JobConfig(method=method), scene=scene)
+                                            JobConfig.of(method), scene=scene)
                 else:
-                    r = run_sim_job(local, scene, T_base_cam, JobSpec(t, seed, "upright"), JobConfig(method=method))
+                    r = run_sim_job(local, scene, T_base_cam, JobSpec(t, seed, "upright"), JobConfig.of(method))
                 (remote if where == "net" else here).append((time.perf_counter() - start, r.success, r.seconds))
     finally:
         scene.close()

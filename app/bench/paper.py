@@ -1,6 +1,8 @@
 """The paper's published success rates (ICRA 2023, Tables I and II), overall per category and mean,
 to print beside ours. Keys: pose -> method -> {category or 'mean': overall success}."""
 
+from app.predict.methods import canonical
+
 TABLE_I = {
     "upright": {
         "cpd": {"mug": 0.47, "bowl": 0.80, "bottle": 0.54, "mean": 0.60},
@@ -35,7 +37,7 @@ TABLE_II = {
 
 def paper_overall(pose: str, method: str, column: str) -> float | None:
     """The paper's overall success for a pose, method ('nift' = 'ibs-nif') and task or 'mean'."""
-    method = "ibs-nif" if method == "nift" else method
+    method = canonical(method)
     for table in (TABLE_I, TABLE_II):
         value = table.get(pose, {}).get(method, {}).get(column)
         if value is not None:

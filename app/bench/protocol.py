@@ -19,6 +19,8 @@ import trimesh
 from app.nift.field import FUSED_FIELDS
 from app.nift.imitation_config import ImitationConfig
 from app.nift.raycast import scene_of
+from app.predict.config import PredictConfig
+from app.predict.methods import method as method_record
 from app.perception import resample
 from app.sim.cell import CellConfig
 from app.training.views import CAMERAS, kinect_cloud
@@ -60,6 +62,13 @@ class BenchConfig:
         """The optimiser settings of trial `index` (its seed is the index, as for every method)."""
         return ImitationConfig(seed=index, place_contact_scale=self.place_contact_scale, place_demo_match=self.place_demo_match)
 
+    def predict_config(self, method: str, index: int, demos: Path) -> PredictConfig:
+        """What a method's row predicts with in trial `index`: the protocol's schedule and the run's
+        refinements; executed jobs also pair the demos' carried grasps, as the cell does."""
+        return PredictConfig(method=method, demos=demos, fields=self.fields, imitation=self.imitation(index),
+                             center=self.center_grasp, align=self.aligns, feasible=self.feasible,
+                             carried_grasps=self.setting == "executed")
+
     @property
     def fields(self) -> str | None:
         """The field weights the template rows use (`nif`; unset, the fused fields with fused cameras,
@@ -95,8 +104,8 @@ class BenchConfig:
                 if not self.objects_for(t.category):
                     raise ValueError(f"--objects names no {t.category} for the {name} task; "
                                      f"name one or leave the task out of --tasks")
-            if "teacher" in self.methods:
-                raise ValueError("the teacher needs procedural objects' landmarks; leave it out with --objects")
+            if any(method_record(m).true_poses for m in self.methods):
+                raise ValueError("the oracle needs procedural objects' landmarks; leave it out with --objects")
         if self.demo_dir is not None and not Path(self.demo_dir).is_dir():
             raise ValueError(f"--demo-dir {self.demo_dir}: no such directory")
 

@@ -21,7 +21,7 @@ from app.bench.demos import bench_demos
 from app.bench.protocol import BenchConfig, Trial, trials
 from app.io_utils import write_json
 from app.nift.template import weights_id
-from app.predict.methods import ORACLE, check_method
+from app.predict.methods import method as method_record
 from app.tasks.library import task_templates
 from app.tasks.task import task
 
@@ -45,8 +45,7 @@ def prepare(config: BenchConfig, out: Path) -> Path:
     """Check the settings against an earlier run in `out`; build every template; return the demo root."""
     config.check()
     for method in config.methods:
-        if method != ORACLE:
-            check_method(method)
+        method_record(method)
     out.mkdir(parents=True, exist_ok=True)
     run_file = out / "run.json"
     wanted = json.loads(json.dumps(settings(config)))
@@ -63,9 +62,8 @@ def prepare(config: BenchConfig, out: Path) -> Path:
     for name in config.tasks:
         t = task(name)
         for method in config.methods:
-            if method not in (ORACLE, "cpd"):
-                query, feature = check_method(method).split("-")
-                task_templates(t, root / t.demos, query, feature, nif=config.fields)
+            if (m := method_record(method)).template:
+                task_templates(t, root / t.demos, m.query, m.feature, nif=config.fields)
     return root
 
 

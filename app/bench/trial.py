@@ -17,12 +17,12 @@ from app.bench.protocol import BenchConfig, Trial, trial_cloud
 from app.jobs.job import JobConfig
 from app.motion.scene import PlanningScene
 from app.objects.library import LibraryObject, load_object
-from app.predict.methods import ORACLE
+from app.predict.methods import method as method_record
 from app.predict.predict import predict
 from app.sim.cell import CellConfig, SimCell, add_fixtures
 from app.sim.jobs import JobSpec, run_sim_job, spawn_test_object
 from app.sim.judges import judge_grasp, judge_place, judged_copy
-from app.sim.oracle import teacher_prediction
+from app.sim.oracle import oracle_prediction
 from app.sim.spawn import SpawnedObject
 from app.tasks.task import task
 from hardware.gripper_geometry import lowest_point
@@ -76,12 +76,11 @@ class TeleportedBench:
         for method in config.methods:
             start = time.perf_counter()
             try:
-                if method == ORACLE:
-                    pred = teacher_prediction(t, obj.mesh, obj.scale, T_base_obj, T_base_fixture)
+                if method_record(method).true_poses:
+                    pred = oracle_prediction(t, obj.mesh, obj.scale, T_base_obj, T_base_fixture)
                 else:
-                    pred = predict(t, cloud, method, T_base_fixture, demo_root / t.demos,
-                                   config.imitation(trial.index), config.fields, config.center_grasp,
-                                   config.feasible, align=config.aligns)
+                    pred = predict(t, cloud, config.predict_config(method, trial.index, demo_root / t.demos),
+                                   T_base_fixture)
             except ValueError as exc:
                 rows.append({**base, "method": method, "grasp": False, "place": False, "overall": False,
                              "gripper_in_table": False, "why": f"no prediction: {exc}", "seconds": round(time.perf_counter() - start, 2)})
@@ -117,9 +116,7 @@ class ExecutedBench:
         t = task(trial.task)
         rows = []
         for method in config.methods:
-            job = JobConfig(method=method, demos=demo_root / t.demos, imitation=config.imitation(trial.index),
-                            center_grasp=config.center_grasp, feasible=config.feasible,
-                            align_grasp=config.aligns)
+            job = JobConfig(predict=config.predict_config(method, trial.index, demo_root / t.demos))
             spec = JobSpec(t, tuple(trial.seed(config.seed)), trial.pose, self.source(trial))
             r = run_sim_job(self.sim, self.scene, self.T_base_cam, spec, job)
             failed = r.failed_stage or ""

@@ -18,7 +18,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="comma list: mug, bowl, bottle, and the out-of-domain bowl-demos-on-mug, bottle-demos-on-vase")
     p.add_argument("--poses", default="upright,arbitrary", help="comma list: upright, arbitrary")
     p.add_argument("--methods", default="cpd,bps-ndf,bps-scf,bps-nif,ibs-ndf,ibs-scf,ibs-nif",
-                   help="comma list of methods (nift = ibs-nif; teacher = the oracle)")
+                   help="comma list of methods (nift = ibs-nif; oracle, alias teacher: the simulator's true poses)")
     p.add_argument("--trials", type=int, default=100, help="objects per task and pose (paper: 100)")
     p.add_argument("--demos", type=int, default=10, help="demos per task, the first N of demos/<task> (paper: 10)")
     p.add_argument("--camera", default="single", choices=["single", "fused"],
@@ -72,7 +72,7 @@ def run(args: argparse.Namespace) -> int:
     from app.io_utils import writable_directory
     from app.nift.field import load_field
     from app.nift.template import field_override
-    from app.predict.methods import ORACLE, check_method
+    from app.predict.methods import canonical
     from app.categories import POSES
     from app.tasks.task import task
 
@@ -83,7 +83,7 @@ def run(args: argparse.Namespace) -> int:
     for pose in poses:
         if pose not in POSES:
             raise ValueError(f"unknown pose setting {pose!r}; choose from {', '.join(POSES)}")
-    methods = tuple(m if m == ORACLE else check_method(m) for m in _names(args.methods))
+    methods = tuple(canonical(m) for m in _names(args.methods))
     config = BenchConfig(tasks, poses, methods, args.trials, args.demos, args.camera, args.setting, args.seed,
                          args.nif, center_grasp=args.center_grasp, align_grasp=args.align_grasp,
                          feasible=args.feasible,

@@ -13,9 +13,9 @@ HELP = "run a series of executed jobs per task and report success, planning, tra
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    from app.predict.methods import SIM_METHODS
+    from app.predict.methods import choices
 
-    p.add_argument("--method", default="nift", choices=SIM_METHODS, help="method (teacher: the oracle)")
+    p.add_argument("--method", default="nift", choices=choices(), help="method (oracle, or teacher: the simulator's true poses)")
     p.add_argument("--jobs", type=int, default=20, help="jobs per task (default 20)")
     p.add_argument("--tasks", default="mug,bowl,bottle", help="comma list of tasks")
     p.add_argument("--pose", default="upright", choices=POSES, help="how the objects stand (see nift run --help)")

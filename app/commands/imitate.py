@@ -11,11 +11,11 @@ HELP = "predict the grasp pose and the place motion for an object cloud from a t
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     from app.console.options import add_imitation_arguments
-    from app.predict.methods import METHODS
+    from app.predict.methods import choices
 
     p.add_argument("--task", required=True, choices=["mug", "bowl", "bottle"], help="which task's demos to imitate")
     p.add_argument("--cloud", type=Path, required=True, help="object cloud in the base frame (.ply .pcd .xyz .npy)")
-    p.add_argument("--method", default="nift", choices=METHODS, help="nift (= ibs-nif), a query-feature baseline, or cpd")
+    p.add_argument("--method", default="nift", choices=choices(true_poses=False), help="nift (= ibs-nif), a query-feature baseline, or cpd")
     p.add_argument("--demos", type=Path, help="task directory (default demos/<task>)")
     p.add_argument("--seed", type=int, default=0, help="initial rotations and translations")
     add_imitation_arguments(p)
@@ -39,12 +39,14 @@ def run(args: argparse.Namespace) -> int:
     cloud = check_cloud(load_cloud(args.cloud), str(args.cloud))
     config = imitation_config(args)  # bad input fails here, before the method's imports (torch: seconds)
 
+    from app.predict.config import PredictConfig
     from app.predict.predict import predict
     from app.tasks.task import task
     from hardware.se3 import pose_to_ur
 
-    pred = predict(task(args.task), cloud, args.method, directory=args.demos, config=config,
-                   center=args.center_grasp, feasible=args.feasible, align=args.align_grasp)
+    settings = PredictConfig(method=args.method, demos=args.demos, imitation=config, center=args.center_grasp,
+                             feasible=args.feasible, align=args.align_grasp, carried_grasps=False)
+    pred = predict(task(args.task), cloud, settings)
     if args.json:
         print(json.dumps(pred.record(), indent=2))
         return 0

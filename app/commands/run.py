@@ -13,7 +13,7 @@ HELP = "run pick-and-place jobs in the sim cell: capture, imitate, plan, grasp, 
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    from app.predict.methods import SIM_METHODS
+    from app.predict.methods import choices
 
     p.add_argument("--task", required=True, choices=["mug", "bowl", "bottle"], help="which task to do")
     p.add_argument("--pose", default="upright", choices=POSES,
@@ -21,8 +21,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                         "the table and settled, as it fell)")
     p.add_argument("--seed", type=int, default=0, help="picks the unseen object, its scale and pose (job i: seed + i)")
     p.add_argument("--jobs", type=int, default=1, help="run a series of this many jobs")
-    p.add_argument("--method", default="nift", choices=SIM_METHODS,
-                   help="how grasp and place poses are found (teacher: the simulator's ground truth, an oracle)")
+    p.add_argument("--method", default="nift", choices=choices(),
+                   help="how grasp and place poses are found (oracle, alias teacher: the simulator's ground truth)")
     p.add_argument("--object", metavar="NAME", help="an imported object (nift objects import) instead of unseen "
                    "procedural ones; each job puts it in a new pose")
     p.add_argument("--demos", type=Path, help="task directory (default demos/<task>)")
@@ -50,13 +50,14 @@ def run(args: argparse.Namespace) -> int:
         cell_config(args)  # a bad --config fails here, in a second, not after the job path's imports
 
     from app.jobs.job import JobConfig
+    from app.predict.config import PredictConfig
     from app.tasks.task import task
 
     t = task(args.task)
     source = imported(args.object, t, args.method) if args.object else None
     if source is not None and args.devices == "net":
         raise ValueError("--object needs the simulated cell in this process (--devices sim)")
-    config = JobConfig(method=args.method, demos=args.demos, second_look=args.second_look)
+    config = JobConfig(predict=PredictConfig(method=args.method, demos=args.demos), second_look=args.second_look)
     results = _run_net(args, t, config) if args.devices == "net" else _run_sim(args, t, config, source)
     return _report(results, args, t)
 
@@ -64,11 +65,11 @@ def run(args: argparse.Namespace) -> int:
 def imported(name: str, t, method: str):
     """The library object `name`, checked against the task and the method; a one-line error if unfit."""
     from app.objects.library import load_object
-    from app.predict.methods import ORACLE
+    from app.predict.methods import method as method_record
 
     source = load_object(name, category=t.category)
-    if method == ORACLE:
-        raise ValueError(f"--method {ORACLE} needs a procedural object's landmarks and {name!r} is imported; "
+    if method_record(method).true_poses:
+        raise ValueError(f"--method {method} needs a procedural object's landmarks and {name!r} is imported; "
                          f"use a learned method")
     return source
 

@@ -19,31 +19,17 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from app.failures import NoCandidate, NoDemoLikeGrasp, PlanningFailure
 from app.motion.executor import HALF_TURN, FingerWidths, PickPlacePlan, Planner
-from app.motion.ik import NoIKSolution
+from app.motion.ik import Blocked
 from app.predict.candidates import Candidate
 from hardware.se3 import pose_to_ur
 
-Failure = Callable[[np.ndarray, str], "str | None"]  # TCP pose (4, 4), what it is -> why not, or None
+Failure = Callable[[np.ndarray, str], "Blocked | None"]  # TCP pose (4, 4), what it is -> why not, or None
 Widths = Callable[[np.ndarray], FingerWidths]  # grasp (4, 4) -> the fingers' openings on the way
 
-
-NO_DEMO_LIKE_GRASP = "no grasp like the demos'"  # how a job's reason starts when none exists (bench counts it apart)
-GRASP_HITS = "the gripper at the grasp hits "  # the quick test's outcome (app.motion.ik.reach_failure)
+NO_DEMO_LIKE_GRASP = "no grasp like the demos'"  # how the reason of a NoDemoLikeGrasp begins
 PICK_ONLY = "planned (pick only: the place waits for the second look)"
-
-
-def _grasp_in_table(outcome: str) -> bool:
-    """Whether a pair's outcome says its open gripper at the grasp is in the table (among other things)."""
-    return outcome.startswith(GRASP_HITS) and "table" in outcome[len(GRASP_HITS):].split(" (")[0].split(", ")
-
-
-class NoCandidate(NoIKSolution):
-    """No candidate pair could be planned; `tried` says what happened to each."""
-
-    def __init__(self, message: str, tried: list[dict]) -> None:
-        super().__init__(message)
-        self.tried = tried
 
 
 @dataclass
@@ -69,7 +55,7 @@ class _Cached:
     def __init__(self, failure: Failure) -> None:
         self.failure, self.seen = failure, {}
 
-    def __call__(self, T: np.ndarray, what: str, width: float = 0.0) -> str | None:
+    def __call__(self, T: np.ndarray, what: str, width: float = 0.0) -> Blocked | None:
         key = (np.round(T, 6).tobytes(), what, width)
         if key not in self.seen:
             why = self.failure(T, what)
@@ -87,21 +73,25 @@ def choose(planner: Planner, candidates: list[Candidate], q_start: np.ndarray,
     when no pair plans, the first grasp that plans alone (its plan has no place)."""
     quick = _Cached(failure)
     tried: list[dict] = []
+    in_table: list[bool] = []  # per pair tried: its open gripper at the grasp is in the table
     plans = 0
     for c in candidates:
         opening, why = _grasp_quick(planner, c, quick, widths)
+        grasp_in_table = why is not None and why.in_table
         if not why:
             with planner.scene.fingers(opening.held):
                 why = quick(c.T_base_tcp_place, "place", opening.held)
         if why:
             tried.append(describe(c, f"{why} (quick test)"))
+            in_table.append(grasp_in_table)
             continue
         plans += 1
         try:
             direction = place_direction(c) if callable(place_direction) else place_direction
             plan = planner.pick_place(q_start, c.T_base_tcp, c.T_base_tcp_place, direction, opening)
-        except NoIKSolution as exc:
+        except PlanningFailure as exc:
             tried.append(describe(c, str(exc)))
+            in_table.append(False)
             if plans >= most_plans:
                 break
             continue
@@ -111,15 +101,15 @@ def choose(planner: Planner, candidates: list[Candidate], q_start: np.ndarray,
         tried.append(describe(picked.candidate, PICK_ONLY))
         return Choice(picked.plan, picked.candidate, tried)
     if not tried:
-        raise NoCandidate(f"{NO_DEMO_LIKE_GRASP} was found on this cloud (no candidate)", tried)
-    if all(_grasp_in_table(t["outcome"]) for t in tried):
-        raise NoCandidate(f"{NO_DEMO_LIKE_GRASP} exists in this pose: every candidate's gripper "
+        raise NoDemoLikeGrasp(f"{NO_DEMO_LIKE_GRASP} was found on this cloud (no candidate)", tried)
+    if all(in_table):
+        raise NoDemoLikeGrasp(f"{NO_DEMO_LIKE_GRASP} exists in this pose: every candidate's gripper "
                           f"({len(tried)}, both half-turns) would be in the table", tried)
     raise NoCandidate(f"none of {len(tried)} candidates could be planned; the best: {tried[0]['outcome']}", tried)
 
 
 def _grasp_quick(planner: Planner, c: Candidate, quick: _Cached,
-                 widths: Widths | None) -> tuple[FingerWidths, str | None]:
+                 widths: Widths | None) -> tuple[FingerWidths, Blocked | None]:
     """The fingers' openings for the pair's grasp, and the quick test's reason against it (None: passes)."""
     opening = widths(c.T_base_tcp) if widths else FingerWidths.fully_open(planner.scene.geometry.stroke)
     with planner.scene.fingers(opening.approach):
@@ -141,7 +131,7 @@ def _pick_alone(planner: Planner, candidates: list[Candidate], q_start: np.ndarr
         plans += 1
         try:
             return Choice(planner.pick_place(q_start, c.T_base_tcp, None, None, opening), c)
-        except NoIKSolution:
+        except PlanningFailure:
             if plans >= most_plans:
                 return None
     return None

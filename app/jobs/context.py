@@ -15,7 +15,7 @@ from app.motion.place_line import above_peg, fixture_approach, peg_line_directio
 from app.motion.scene import PlanningScene
 from app.predict.candidates import Candidate
 from app.predict.hole_places import DemoHang, demo_hang
-from app.predict.methods import ORACLE
+from app.predict.methods import method as method_record
 from app.predict.predict import Prediction
 from app.tasks.library import DEMOS_DIR, task_demos
 from app.tasks.task import Task
@@ -57,7 +57,7 @@ class JobContext:
     def hang(self) -> DemoHang:
         """Where the task's demos hung the handle hole and how they carried (`app.predict.hole_places`),
         read and computed once per job."""
-        return demo_hang(task_demos(self.config.demos or DEMOS_DIR / self.t.demos))
+        return demo_hang(task_demos(self.config.predict.demos or DEMOS_DIR / self.t.demos))
 
     @cached_property
     def T_base_fixture_placed(self) -> np.ndarray:
@@ -79,15 +79,15 @@ class JobContext:
     def guards_hang(self) -> bool:
         """Whether a hang's place line is guarded and searched beside (`app.jobs.guarded`), and its way out
         guarded too: a hang from a predicted place, whose hole is a centimetre or two off and whose mug
-        may swing onto the peg as it is let go. The oracle's exact hangs run as planned (guarded, its
-        resting mugs hung 45 of 50, not 47: a 30 N stop cut hangs short) and a shelf's place line ends
-        pressing on the shelf (a bottle that stood: 325 N)."""
-        return self.config.method != ORACLE and is_hang(self.t)
+        may swing onto the peg as it is let go. A method that reads true poses (the oracle) hangs exactly:
+        its lines run as planned (a 30 N stop would cut its hangs short), and a shelf's place line ends
+        pressing on the shelf (docs/jobs.md)."""
+        return not method_record(self.config.method).true_poses and is_hang(self.t)
 
     def looks_for_hole(self) -> bool:
-        """Whether the job tries places built from the handle hole: a hang by a method that is not the
-        oracle, with `hole_places` on."""
-        return self.config.hole_places and self.config.method != ORACLE and is_hang(self.t)
+        """Whether the job tries places built from the handle hole: a hang by a method that does not read
+        true poses, with `PredictConfig.hole_places` on."""
+        return self.config.predict.hole_places and self.guards_hang()
 
     def place_line(self, cloud: np.ndarray) -> Callable[[Candidate], np.ndarray]:
         """Pair -> the direction of its line onto the fixture: one on which the object's seen points

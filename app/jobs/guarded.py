@@ -6,8 +6,8 @@ the force on the tool stops the arm at rest, rather than pressing on into a prot
 
 The place line of a mug threads its handle onto the rack's peg. The hole comes from the cloud, a
 centimetre or two off, and the mug may have turned a few degrees in the grasp: the peg's tip then
-meets the handle or the wall 5-8 cm before the place (NIFT's resting mugs 9, 23, 25, 42 and 48
-stopped there in protective stops). A person would back off and try again a little to the side,
+meets the handle or the wall 5-8 cm before the place, where an unguarded line ends in a protective
+stop (docs/jobs.md). A person would back off and try again a little to the side,
 as a robot threads a peg into a hole (a search about the nominal line, as in assembly):
 
     T_k = T_place + r_k (cos(phi_k) u + sin(phi_k) v),    u, v _|_ d, d the line's direction,
@@ -22,9 +22,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from app.failures import ContactStop, ExecutionFailure
 from app.jobs.context import JobContext
-from app.jobs.record import JobFailed
-from app.motion.executor import ExecutionError, execute
+from app.motion.executor import execute, motion_failure
 from app.motion.trajectory import remainder
 from hardware.se3 import make_pose, pose_to_ur
 
@@ -35,13 +35,13 @@ SEARCH_SPEED, SEARCH_ACCELERATION = 0.1, 0.5  # m/s, m/s^2 of the search's lines
 
 def guarded_line(job: JobContext, line, force: float) -> tuple[float | None, str]:
     """Execute a joint trajectory under contact detection at `force` N: (None, '') when it got to its
-    end; (how far (m) the TCP stopped short of it, why) when a contact stopped it; ExecutionError for
+    end; (how far (m) the TCP stopped short of it, why) when a contact stopped it; ExecutionFailure for
     any other stop."""
     job.arm.startContactDetection(force)
     try:
         execute(job.arm, line, job.config.executor.end_tolerance)
         return None, ""
-    except ExecutionError as exc:
+    except ExecutionFailure as exc:
         if not job.arm.readContactDetection():
             raise
         return _short_of(job, job.kin.fk(line.end)), str(exc)
@@ -66,8 +66,8 @@ def guarded_place(job: JobContext, place) -> bool:
 
 def guarded_leave(job: JobContext, leave: list) -> None:
     """Retreat, clear and go home (`leave`: their trajectories). A predicted hang's way out (`JobContext.guards_hang`)
-    runs under contact detection: fingers that meet the mug they let go (NIFT's upright mugs 12, 29 and
-    44 were dragged into protective stops) stop the arm at rest, the gripper opens fully (2 cm more on
+    runs under contact detection: fingers that meet the mug they let go (which an unguarded way out drags
+    into a protective stop) stop the arm at rest, the gripper opens fully (2 cm more on
     each side), and the arm carries on along the planned way out from where it stopped."""
     tolerance = job.config.executor.end_tolerance
     if not job.guards_hang():
@@ -88,7 +88,7 @@ def guarded_leave(job: JobContext, leave: list) -> None:
 
 def search_place(job: JobContext, T_pre: np.ndarray, T_place: np.ndarray, met: float, why: str) -> float:
     """The place line shifted about its nominal one (the module's docstring) until a shifted line gets
-    within `PLACE_ARRIVED` of its end: how far short it stopped; JobFailed, the arm at rest at the
+    within `PLACE_ARRIVED` of its end: how far short it stopped; ContactStop, the arm at rest at the
     pre-place, when none does."""
     offsets = search_offsets(T_place[:3, 3] - T_pre[:3, 3])
     tried = np.zeros(3)  # the offset of the line that last met something
@@ -103,7 +103,7 @@ def search_place(job: JobContext, T_pre: np.ndarray, T_place: np.ndarray, met: f
         finally:
             job.arm.stopContactDetection()
         if not arrived and not stopped:
-            raise JobFailed(f"place: the search's line stopped: {job.arm.getLastError()}")
+            raise motion_failure(job.arm, "place: the search's line")
         short = 0.0 if arrived else _short_of(job, _moved(T_place, offset))
         job.result.notes.append(f"place: a line {1000 * np.linalg.norm(offset):.0f} mm aside "
                                 f"{'got there' if arrived else f'met something {1000 * short:.0f} mm short'}")
@@ -111,7 +111,7 @@ def search_place(job: JobContext, T_pre: np.ndarray, T_place: np.ndarray, met: f
             return short
     _move(job, _moved(T_pre, tried), "backing off to the pre-place")
     _move(job, T_pre, "the move back")
-    raise JobFailed(f"place: the held object met something {1000 * met:.0f} mm before its place ({why}), "
+    raise ContactStop(f"place: the held object met something {1000 * met:.0f} mm before its place ({why}), "
                     f"and on each of {len(offsets)} lines beside it")
 
 
@@ -132,7 +132,7 @@ def _moved(T: np.ndarray, offset: np.ndarray) -> np.ndarray:
 
 def _move(job: JobContext, T: np.ndarray, what: str) -> None:
     if not job.arm.moveL(pose_to_ur(T), SEARCH_SPEED, SEARCH_ACCELERATION):
-        raise JobFailed(f"place: {what} stopped: {job.arm.getLastError()}")
+        raise motion_failure(job.arm, f"place: {what}")
 
 
 def _short_of(job: JobContext, T_end: np.ndarray) -> float:

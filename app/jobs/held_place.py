@@ -8,10 +8,10 @@ from dataclasses import replace
 import numpy as np
 
 from app.jobs.context import JobContext
-from app.jobs.record import JobFailed, check_held, ur
+from app.jobs.record import check_held, ur
 from app.jobs.second_look import second_look
 from app.motion.executor import OBJECT, FingerWidths, Planner
-from app.motion.ik import NoIKSolution
+from app.failures import NoCandidate, PerceptionFailure, PlanningFailure
 from app.perception import resample
 from app.predict.candidates import Candidate
 from app.predict.hole_places import with_hole_pairs
@@ -32,7 +32,7 @@ def look_and_place(job: JobContext, planner: Planner, plan, chosen: Candidate, o
         try:
             views = second_look(job.arm, job.camera, planner, job.T_base_cam, job.points, T_grasp, width,
                                 job.config.executor.end_tolerance, job.config.look, job.config.perception)
-        except (ValueError, NoIKSolution) as exc:  # nothing seen, or no way to show it: go on with the first look
+        except (PerceptionFailure, PlanningFailure) as exc:  # nothing seen, or no way to show it: the first look
             views, look = None, {"used": False, "why": str(exc)}
         check_held(job.gripper, "second look")
         tries = []  # (pair, the cloud it moves, whether the look gave it)
@@ -55,7 +55,7 @@ def look_and_place(job: JobContext, planner: Planner, plan, chosen: Candidate, o
             c = replace(c, T_base_fixture=T_above)  # placed clear of a peg, as the first look's pairs
             try:
                 rest = planner.place_from(q, T_grasp, c.motion @ T_grasp, job.place_line(seen)(c), widths)
-            except NoIKSolution as exc:
+            except PlanningFailure as exc:
                 whys.append(str(exc))
                 if looked:
                     look_whys.append(whys[-1])
@@ -67,7 +67,7 @@ def look_and_place(job: JobContext, planner: Planner, plan, chosen: Candidate, o
             job.result.notes += rest.notes
             return rest, transform_points(c.motion, seen)
         job.result.look = _with_why(look, views is not None, look_whys)
-        raise JobFailed(f"none of {len(tries)} places could be planned for the held grasp; the best: "
+        raise NoCandidate(f"none of {len(tries)} places could be planned for the held grasp; the best: "
                         f"{whys[0] if whys else 'no place'}")
 
 

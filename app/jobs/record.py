@@ -7,8 +7,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from app.motion.executor import ExecutionError
-from app.motion.ik import NoIKSolution
+from app.failures import GraspMissed
 from hardware.interfaces import Gripper
 from hardware.se3 import pose_to_ur
 
@@ -31,18 +30,6 @@ class JobHooks:
         return seen
 
 
-class JobFailed(RuntimeError):
-    """A stage could not do its part."""
-
-
-class GraspMissed(JobFailed):
-    """The gripper holds nothing after closing, after the lift, the second look or the carry."""
-
-
-class PlaceMissed(JobFailed):
-    """After the release the camera sees nothing new where the object was sent: it fell somewhere else."""
-
-
 def check_held(gripper: Gripper, during: str) -> None:
     """GraspMissed when the gripper no longer holds the object after the motion `during`."""
     if not gripper.object_detected:
@@ -58,6 +45,7 @@ class JobResult:
     method: str
     success: bool = False
     failed_stage: str | None = None
+    failure_kind: str | None = None  # `app.failures`: the failure's kind, or "internal_error" for a bug
     reason: str = ""
     seconds: dict[str, float] = field(default_factory=dict)  # wall time per stage, summed over attempts
     poses: dict[str, list[float]] = field(default_factory=dict)  # UR poses [x y z rx ry rz], base frame
@@ -74,22 +62,21 @@ class JobResult:
     def record(self) -> dict:
         """JSON-ready."""
         return {"task": self.task, "method": self.method, "success": self.success, "failed_stage": self.failed_stage,
-                "reason": self.reason, "seconds": self.seconds, "total_seconds": round(sum(self.seconds.values()), 3),
+                "failure_kind": self.failure_kind, "reason": self.reason, "seconds": self.seconds, "total_seconds": round(sum(self.seconds.values()), 3),
                 "poses": self.poses, "plan": self.plan, "arm": self.arm, "seen": self.seen, "candidates": self.candidates,
                 "attempts": self.attempts, "look": self.look, "hole": self.hole, "notes": self.notes, **self.info}
 
 
 @contextmanager
 def stage(result: JobResult, name: str, hooks: JobHooks):
-    """Time a stage (summed over attempts); turn its expected errors into JobFailed(stage)."""
+    """Time a stage (summed over attempts); a failure in it, expected (`CellFailure`) or a bug, is
+    recorded as the stage's and passes on."""
     start = time.perf_counter()
     try:
         yield
-    except (JobFailed, NoIKSolution, ExecutionError, ValueError, FileNotFoundError) as exc:
+    except Exception:
         result.failed_stage = name
-        if isinstance(exc, JobFailed):
-            raise
-        raise JobFailed(str(exc)) from exc
+        raise
     finally:
         result.seconds[name] = round(result.seconds.get(name, 0.0) + time.perf_counter() - start, 3)
     hooks.keyframe(name)

@@ -15,6 +15,7 @@ from app.jobs.job import JobConfig, JobHooks, JobResult, run_job
 from app.layout import CellLayout
 from app.motion.scene import PlanningScene
 from app.predict.methods import ORACLE
+from app.predict.methods import method as method_record
 from app.predict.predict import Prediction
 from app.tasks.task import Task
 from calibration.store import load_calibration, save_calibration
@@ -104,7 +105,7 @@ def run_remote_series(cell: NetCell, layout: CellLayout, t: Task, seeds: list[in
             info = cell.rig_run("prepare", t.name, seed, pose)
             try:
                 result = run_job(t, cell.arm, cell.gripper, cell.camera, T_base_cam, layout.fixture_pose(t.fixture),
-                                 scene, config, RigHooks(cell), _oracle(cell) if config.method == ORACLE else None)
+                                 scene, config, RigHooks(cell), _oracle(cell) if method_record(config.method).true_poses else None)
             finally:
                 cell.rig_run("clear")
             result.info = {**info, "devices": "net"}

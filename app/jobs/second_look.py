@@ -21,6 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from app.failures import OutOfJointLimits
 from app.motion.executor import OBJECT, Planner, execute
 from app.perception import PerceptionConfig, held_object_cloud
 from hardware.interfaces import Arm, DepthCamera, JointLimits
@@ -43,7 +44,7 @@ def view_q(q: np.ndarray, turn: float, limits: JointLimits) -> np.ndarray:
         out[5] += signed
         if limits.contains(out):
             return out
-    raise ValueError(f"the wrist cannot turn by {turn:.2f} rad either way from {q[5]:.2f} rad")
+    raise OutOfJointLimits(f"the wrist cannot turn by {turn:.2f} rad either way from {q[5]:.2f} rad")
 
 
 def to_grasp_frame(points: np.ndarray, T_base_grasp: np.ndarray, T_base_view: np.ndarray) -> np.ndarray:
@@ -56,8 +57,8 @@ def second_look(arm: Arm, camera: DepthCamera, planner: Planner, T_base_cam: np.
                 config: SecondLookConfig = SecondLookConfig(),
                 perception: PerceptionConfig = PerceptionConfig()) -> list[np.ndarray]:
     """Show the held object, first seen as the points `first` (M, 3), from each view; return each
-    view's points (M_i, 3) in the grasp-time frame; the arm is left at the last view. ValueError when
-    a view shows nothing."""
+    view's points (M_i, 3) in the grasp-time frame; the arm is left at the last view. ObjectNotSeen when
+    a view shows nothing, OutOfJointLimits when the wrist cannot turn, a PlanningFailure when it cannot get there."""
     start_q = arm.getActualQ()
     radius = float(np.linalg.norm(first - first.mean(axis=0), axis=1).max()) + config.reach
     views = []

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from app.motion.ik import NoIKSolution
+from app.failures import NoIKSolution, PathCollides
 from app.motion.scene import PlanningScene
 from hardware.kinematics import UR5Kinematics
 from hardware.se3 import interpolate_pose, line_length
@@ -37,7 +37,7 @@ def continued_ik(kin: UR5Kinematics, T0: np.ndarray, T1: np.ndarray, s0: float, 
 def line_path(kin: UR5Kinematics, T0: np.ndarray, T1: np.ndarray, q0: np.ndarray, scene: PlanningScene | None = None,
               ignore: tuple[str, ...] = (), what: str = "line") -> np.ndarray:
     """Joint positions (K, 6) tracing the TCP from T0 (at q0) to T1 on a straight line, each the
-    closed-form branch nearest the previous; NoIKSolution if IK fails, flips or collides on the way."""
+    closed-form branch nearest the previous; NoIKSolution if IK fails or flips on the way, PathCollides where it collides."""
     n = max(2, int(np.ceil(line_length(T0, T1) / STEP)) + 1)
     path = [np.asarray(q0, float)]
     for i in range(1, n):
@@ -50,6 +50,6 @@ def line_path(kin: UR5Kinematics, T0: np.ndarray, T1: np.ndarray, q0: np.ndarray
         if q is None:
             raise NoIKSolution(f"{what}: the arm would have to flip its configuration at {100 * s:.0f}% of the line")
         if scene is not None and (hits := scene.collisions(q, ignore)):
-            raise NoIKSolution(f"{what}: collision at {100 * s:.0f}% of the line ({', '.join(hits[:3])})")
+            raise PathCollides(f"{what}: collision at {100 * s:.0f}% of the line ({', '.join(hits[:3])})")
         path.append(q)
     return np.array(path)

@@ -25,8 +25,10 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from app.motion.cartesian import line_path
-from app.motion.ik import IKConfig, NoIKSolution, joint_distance, solutions
-from app.motion.sampling import NoPath, SamplingConfig, densify, plan_joint_path
+from app.failures import (ExecutionFailure, MotionStopped, NoPath, PathCollides, PlanningFailure,
+                          ProtectiveStop)
+from app.motion.ik import IKConfig, joint_distance, solutions
+from app.motion.sampling import SamplingConfig, densify, plan_joint_path
 from app.motion.scene import PlanningScene
 from app.motion.trajectory import JointTrajectory, path_timing, through_waypoints
 from hardware.interfaces import Arm, JointLimits
@@ -84,10 +86,6 @@ class FingerWidths:
         return cls(stroke, stroke, stroke)
 
 
-class ExecutionError(RuntimeError):
-    """A motion did not complete (protective stop, tracking error)."""
-
-
 @dataclass
 class PickPlacePlan:
     """The planned segments, in order, with the grasp actually used and the planning time."""
@@ -97,8 +95,13 @@ class PickPlacePlan:
     T_base_place: np.ndarray | None  # None: a pick alone, its place still to plan
     seconds: float = 0.0
     travel: float = 0.0  # rad of joint travel, summed
-    notes: list[str] = field(default_factory=list)
+    carry_may_pivot: bool = False  # no carry was found that keeps the held object from turning in the fingers
     widths: FingerWidths | None = None  # the fingers' openings the plan was checked with (None: fully open)
+
+    @property
+    def notes(self) -> list[str]:
+        """What the record says of the plan beyond its segments."""
+        return [CARRY_MAY_PIVOT] if self.carry_may_pivot else []
 
     def segment(self, label: str) -> JointTrajectory:
         return next(s for s in self.segments if s.label == label)
@@ -128,14 +131,14 @@ class Planner:
         try:
             waypoints = plan_joint_path(self.scene, q0, q1, ignore, search or self.config.sampling, allowed)
         except NoPath as exc:
-            raise NoIKSolution(f"{label}: {exc} (the direct one hits {', '.join(hits[:3])})") from None
+            raise NoPath(f"{label}: {exc} (the direct one hits {', '.join(hits[:3])})") from None
         dense = densify(waypoints, self.config.sampling.max_step / 2)
         # last, on the very segments the planner checked (docs/decisions.md)
         for path, straight in ((waypoints, False), (dense, False), (waypoints, True)):
             traj = self._timed(path, label, straight)
             if not self._collisions(traj, ignore, allowed):
                 return traj
-        raise NoIKSolution(f"{label}: the sampled joint path collides once timed ({', '.join(hits[:3])} on the direct one)")
+        raise PathCollides(f"{label}: the sampled joint path collides once timed ({', '.join(hits[:3])} on the direct one)")
 
     def carry(self, q0: np.ndarray, q1: np.ndarray, ignore: tuple[str, ...] = (),
               lever: float = 0.0) -> tuple[JointTrajectory, bool]:
@@ -150,7 +153,7 @@ class Planner:
         try:
             return self.transit(q0, q1, "carry", ignore, held_without_pivot(self.kin, q0, q1, self.config.carry_pivot),
                                 search), True
-        except NoIKSolution:
+        except PlanningFailure:
             return self.transit(q0, q1, "carry", ignore), short
 
     def held_lever(self, T_base_grasp: np.ndarray) -> float:
@@ -183,22 +186,22 @@ class Planner:
         pre-grasp, approach, lift), its place planned later with `place_from`."""
         start = time.perf_counter()
         widths = widths or FingerWidths.fully_open(self.scene.geometry.stroke)
-        errors = []
+        errors: list[PlanningFailure] = []
         plans = []  # a plan whose carry may pivot the object is kept while the other half-turn is tried
         for flip in self._flips_nearest_first(q_start, T_base_grasp):
             try:
                 T_place = None if T_base_place is None else T_base_place @ flip
                 plans.append(self._pick_place(q_start, T_base_grasp @ flip, T_place, place_direction, widths))
-            except NoIKSolution as exc:
-                errors.append(str(exc))
+            except PlanningFailure as exc:
+                errors.append(exc)
                 continue
-            if CARRY_MAY_PIVOT not in plans[-1].notes:
+            if not plans[-1].carry_may_pivot:
                 break
         if plans:
-            plan = next((p for p in plans if CARRY_MAY_PIVOT not in p.notes), plans[0])
+            plan = next((p for p in plans if not p.carry_may_pivot), plans[0])
             plan.seconds = time.perf_counter() - start
             return plan
-        raise NoIKSolution(" / ".join(dict.fromkeys(errors)))
+        raise type(errors[0])(" / ".join(dict.fromkeys(str(e) for e in errors)))  # the first half-turn's kind
 
     def _flips_nearest_first(self, q_start: np.ndarray, T_base_grasp: np.ndarray) -> list[np.ndarray]:
         """The grasp and its half-turn, the one whose nearest IK branch is nearer q_start first (the
@@ -228,11 +231,11 @@ class Planner:
         approach, lift = self._first(at_grasp, grasp_lines)
         with self.scene.fingers(widths.approach):
             to_pre_grasp = self.transit(q_start, approach.q[0], "to pre-grasp")
-        rest, notes = ([], []) if T_place is None else self._place_segments(lift.end, T_grasp, T_place,
+        rest, pivot = ([], False) if T_place is None else self._place_segments(lift.end, T_grasp, T_place,
                                                                              place_direction, widths)
         segments = [to_pre_grasp, approach, lift, *rest]
         travel = float(sum(np.abs(np.diff(s.q, axis=0)).sum() for s in segments))
-        return PickPlacePlan(segments, T_grasp, T_place, travel=travel, notes=notes, widths=widths)
+        return PickPlacePlan(segments, T_grasp, T_place, travel=travel, carry_may_pivot=pivot, widths=widths)
 
     def place_from(self, q_now: np.ndarray, T_base_grasp: np.ndarray, T_base_place: np.ndarray,
                    place_direction: np.ndarray, widths: FingerWidths | None = None) -> PickPlacePlan:
@@ -240,13 +243,14 @@ class Planner:
         the grasp is made): carry, place, retreat, clear, home (`pick_place` for the arguments)."""
         start = time.perf_counter()
         widths = widths or FingerWidths.fully_open(self.scene.geometry.stroke)
-        segments, notes = self._place_segments(q_now, T_base_grasp, T_base_place, place_direction, widths)
+        segments, pivot = self._place_segments(q_now, T_base_grasp, T_base_place, place_direction, widths)
         travel = float(sum(np.abs(np.diff(s.q, axis=0)).sum() for s in segments))
-        return PickPlacePlan(segments, T_base_grasp, T_base_place, time.perf_counter() - start, travel, notes, widths)
+        return PickPlacePlan(segments, T_base_grasp, T_base_place, time.perf_counter() - start, travel, pivot, widths)
 
     def _place_segments(self, q_from, T_grasp, T_place, place_direction,
-                        widths: FingerWidths) -> tuple[list[JointTrajectory], list[str]]:
-        """carry (from q_from, the object held), place, retreat, clear, home; and the plan's notes."""
+                        widths: FingerWidths) -> tuple[list[JointTrajectory], bool]:
+        """carry (from q_from, the object held), place, retreat, clear, home; and whether the carry may
+        pivot the held object."""
         c = self.config
         held, released = widths.held, widths.released
 
@@ -268,7 +272,7 @@ class Planner:
             carry, kept = self.carry(q_from, place.q[0], (OBJECT,), self.held_lever(T_grasp))
         with self.scene.fingers(released):
             home = self.transit(clear.end, np.asarray(c.home_q), "home", ignore=(OBJECT,))
-        return [carry, place, retreat, clear, home], [] if kept else [CARRY_MAY_PIVOT]
+        return [carry, place, retreat, clear, home], not kept
 
     def _retreat_and_clear(self, q: np.ndarray, T_place: np.ndarray,
                            touching: tuple[str, ...] = ()) -> tuple[JointTrajectory, JointTrajectory]:
@@ -295,7 +299,7 @@ class Planner:
         with self.scene.fingers(released):
             try:
                 retreat, clear = self._retreat_and_clear(q, T)
-            except NoIKSolution:
+            except PlanningFailure:
                 retreat, clear = self._retreat_and_clear(q, T, touching=(fixture,))
             return [retreat, clear, self.transit(clear.end, np.asarray(self.config.home_q), "home", ignore=(OBJECT,))]
 
@@ -349,14 +353,14 @@ def held_without_pivot(kin: UR5Kinematics, q0: np.ndarray, q1: np.ndarray, extra
 
 
 def first_that_works(items: list, attempt):
-    """attempt(item) for the first item it succeeds on; the first item's NoIKSolution if none does."""
-    errors = []
+    """attempt(item) for the first item it succeeds on; the first item's PlanningFailure if none does."""
+    errors: list[PlanningFailure] = []
     for item in items:
         try:
             return attempt(item)
-        except NoIKSolution as exc:
-            errors.append(str(exc))
-    raise NoIKSolution(errors[0])
+        except PlanningFailure as exc:
+            errors.append(exc)
+    raise errors[0]
 
 
 def line_offsets(axis: np.ndarray, distance: float, config: ExecutorConfig) -> list[np.ndarray]:
@@ -391,14 +395,14 @@ START_GAP = 0.01  # rad: a trajectory the arm's drivers run must start this clos
 
 def back_to_start(arm: Arm, traj: JointTrajectory, tolerance: float = 0.02, speed: float = 0.5) -> None:
     """Bring an arm that stands farther than `tolerance` from a trajectory's start back there with a
-    short moveJ (the gripper opening on a held bottle pushed the wrist 0.07 rad off the planned place);
-    ExecutionError when that motion stops. Closer than `tolerance`, `execute` starts from where it stands."""
+    short moveJ (the gripper opening on a held object can push the wrist off the planned place);
+    ExecutionFailure when that motion stops. Closer than `tolerance`, `execute` starts from where it stands."""
     if float(np.abs(arm.getActualQ() - traj.q[0]).max()) > tolerance and not arm.moveJ(traj.q[0], speed, 2 * speed):
-        raise ExecutionError(f"{traj.label}: returning to its start stopped: {arm.getLastError() or 'motion stopped'}")
+        raise motion_failure(arm, f"{traj.label}: returning to its start")
 
 
 def execute(arm: Arm, traj: JointTrajectory, tolerance: float = 0.02) -> None:
-    """Run a planned trajectory on the arm; ExecutionError on a stop or if it ends off target. An arm
+    """Run a planned trajectory on the arm; ExecutionFailure on a stop or if it ends off target. An arm
     that the last segment left within `tolerance` of this one's start but not within START_GAP (the
     drivers refuse a path that does not start where the arm is; a loaded arm sags that far) starts
     the path from where it stands: its first sample becomes the arm's joints."""
@@ -408,7 +412,14 @@ def execute(arm: Arm, traj: JointTrajectory, tolerance: float = 0.02) -> None:
         q[0] = q_now
         traj = JointTrajectory(traj.times, q, traj.qd, traj.label)
     if not arm.executeTrajectory(traj.times, traj.q, traj.qd):
-        raise ExecutionError(f"{traj.label}: {arm.getLastError() or 'motion stopped'}")
+        raise motion_failure(arm, traj.label, stopped="")
     error = float(np.abs(arm.getActualQ() - traj.end).max())
     if error > tolerance:
-        raise ExecutionError(f"{traj.label}: ended {error:.3f} rad from its target")
+        raise MotionStopped(f"{traj.label}: ended {error:.3f} rad from its target")
+
+
+def motion_failure(arm: Arm, what: str, stopped: str = " stopped") -> ExecutionFailure:
+    """The failure of a motion `what` the arm did not complete: ProtectiveStop while the arm is in one,
+    MotionStopped otherwise; the message says what, and the arm's own reason."""
+    why = f"{what}{stopped}: {arm.getLastError() or 'motion stopped'}"
+    return ProtectiveStop(why) if arm.isProtectiveStopped() else MotionStopped(why)

@@ -6,6 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from app.failures import NoIKSolution, PlanningFailure
 from app.motion.scene import PlanningScene
 from hardware.kinematics import UR5Kinematics
 
@@ -17,8 +18,20 @@ class IKConfig:
     joint_weights: tuple[float, ...] = (2.0, 2.0, 1.5, 1.0, 1.0, 0.5)  # move the big joints less
 
 
-class NoIKSolution(ValueError):
-    """No collision-free joint configuration reaches the pose."""
+@dataclass(frozen=True)
+class Blocked:
+    """Why the cell cannot put its TCP at a pose: the quick test's answer (`reach_failure`)."""
+
+    why: str
+    gripper_hits: tuple[str, ...] = ()  # what the open gripper alone hits there (empty: it hits nothing)
+
+    def __str__(self) -> str:
+        return self.why
+
+    @property
+    def in_table(self) -> bool:
+        """Whether the open gripper alone is in the table there."""
+        return "table" in self.gripper_hits
 
 
 def joint_distance(q: np.ndarray, q_ref: np.ndarray, weights: tuple[float, ...]) -> float:
@@ -55,17 +68,17 @@ def solve(kin: UR5Kinematics, T_base_tcp: np.ndarray, q_current: np.ndarray, sce
 
 
 def reach_failure(kin: UR5Kinematics, scene: PlanningScene, q_current: np.ndarray, ignore: tuple[str, ...] = ()):
-    """A quick test of TCP poses, pose (4, 4) -> why the cell cannot put its TCP there, or None: the
+    """A quick test of TCP poses, pose (4, 4) -> why the cell cannot put its TCP there (`Blocked`), or None: the
     open gripper alone hits something (`PlanningScene.gripper_collisions`), or no IK branch is
     collision-free (~2 ms a pose). A pose it passes may still fail the full plan (the lines to it)."""
 
-    def failure(T_base_tcp: np.ndarray, what: str = "pose") -> str | None:
+    def failure(T_base_tcp: np.ndarray, what: str = "pose") -> Blocked | None:
         if hits := scene.gripper_collisions(T_base_tcp, ignore):
-            return f"the gripper at the {what} hits {', '.join(hits)}"
+            return Blocked(f"the gripper at the {what} hits {', '.join(hits)}", tuple(hits))
         try:
             solutions(kin, T_base_tcp, q_current, scene, ignore=ignore, what=what)
-        except NoIKSolution as exc:
-            return str(exc)
+        except PlanningFailure as exc:
+            return Blocked(str(exc))
         return None
 
     return failure

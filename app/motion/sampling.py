@@ -14,13 +14,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from app.failures import NoPath
 from app.motion.scene import PlanningScene
 
 JOINT_BOUND = 2 * np.pi  # rad: every UR5 joint turns +-360 degrees
-
-
-class NoPath(RuntimeError):
-    """The sampling planner found no collision-free path within its time."""
 
 
 @dataclass(frozen=True)

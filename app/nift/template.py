@@ -29,7 +29,7 @@ import numpy as np
 import torch
 from scipy.spatial import cKDTree
 
-from app.io_utils import read_npz, write_npz
+from app.io_utils import WrongFormat, read_npz, write_npz
 from app.nift.field import Latent, NeuralField, field_path, load_field
 from app.nift.ibs import compute_ibs
 from app.nift.raycast import scene_of, signed_distance
@@ -193,8 +193,8 @@ def load_template(path: str | Path, weights: str | Path | None = None) -> Templa
         raise FileNotFoundError(f"no template at {path}")
     try:
         header, arrays = read_npz(path, FORMAT, "NIT", ("points", "features", "distances"))
-    except ValueError as exc:
-        if any(f"found {old!r}" in str(exc) for old in OLDER_FORMATS):
+    except WrongFormat as exc:
+        if exc.found in OLDER_FORMATS:
             raise StaleTemplate(f"{exc}; rebuild it from its demos") from None
         raise
     missing = [k for k in HEADER_KEYS if not isinstance(header.get(k), (str, list))]

@@ -1,7 +1,8 @@
 """Grasp and place poses for a target cloud, by NIFT or a baseline, in one code path (paper Table I rows).
 
-Methods: "<query>-<feature>" with query in {ibs, bps} and feature in {nif, scf, ndf} (template
-imitation, Eq. 5), "nift" = "ibs-nif", and "cpd" (demo registration). Every method answers:
+Methods (`app.predict.methods`): "<query>-<feature>" with query in {ibs, bps} and feature in {nif, scf,
+ndf} (template imitation, Eq. 5), "nift" = "ibs-nif", and "cpd" (demo registration); what to do is a
+`PredictConfig` (`app.predict.config`). Every method answers:
 
 - T_base_tcp: the grasp pose of the gripper in the cloud's (base) frame;
 - T_base_fixture_seen: where the rack / shelf would have to be, relative to the object as it is
@@ -16,7 +17,7 @@ a grasp must close on cloud points, a place must be one the grasp could carry th
 the demos. Then both poses are centred on the cloud (our addition): the grasp on the points between
 the fingers (`app.predict.grasp_centering`), a hang on the peg in the middle of the hole's gap
 (`app.predict.peg_centering`; fixtures without a peg are left alone) - on by default, for every method
-alike. Optionally (`align`, off by default: it needs the normals a fused cloud gives and one
+alike. Optionally (`PredictConfig.align`, off by default: it needs the normals a fused cloud gives and one
 Kinect view does not) the grasp is first turned so its fingers close along the normal of the wall
 between them (`app.predict.grasp_alignment`, our addition).
 """
@@ -31,7 +32,7 @@ import numpy as np
 from app.layout import CellLayout
 from app.nift.cpd import best_registration
 from app.nift.field import load_field
-from app.nift.imitate import ImitationConfig, imitate, losses_at, symmetries_of
+from app.nift.imitate import imitate, losses_at, symmetries_of
 from app.nift.template import FEATURES, field_override
 from app.objects import fixture
 from app.predict.candidates import Candidate, excess, ranked_pairs
@@ -41,7 +42,9 @@ from app.predict.feasibility import (Reach, all_of, carries_like_demos,
 from app.predict.grasp_alignment import align_grasp
 from app.predict.grasp_centering import center_grasp
 from app.predict.grasp_starts import gravity_starts
-from app.predict.methods import check_method
+from app.predict.config import PredictConfig
+from app.predict.methods import Family, Method
+from app.predict.methods import method as method_record
 from app.predict.peg_centering import center_on_peg
 from app.tasks.library import (DEMOS_DIR, STAGES, stage_anchor, task_demos,
                                task_templates)
@@ -85,20 +88,15 @@ class Prediction:
                 "seconds": self.seconds, "candidates": len(self.candidates)}
 
 
-def predict(t: Task, cloud: np.ndarray, method: str = "nift", T_base_fixture: np.ndarray | None = None,
-            directory: Path | None = None, config: ImitationConfig = ImitationConfig(),
-            nif: str | Path | None = None, center: bool = True, feasible: bool = True,
-            reachable: Reach | None = None, align: bool = False, carried_grasps: bool = False) -> Prediction:
-    """Grasp pose and place motion for a target cloud (N, 3) in the base frame (`nif`: other field
-    weights, a NIF file or a directory of nif.pt and ndf.pt (`field_override`), default the shipped
-    ones; `center`: centre the grasp on the points between the fingers and a hang on the peg,
-    `app.predict.grasp_centering` and `app.predict.peg_centering`; `feasible`: prefer feasible poses,
-    `app.predict.feasibility`; `reachable`: whether the cell can put its gripper at a grasp pose - given,
-    a template method's feasible grasps are also ones it can reach; `align`: turn the grasp so the
-    fingers close along the normal of the wall between them, `app.predict.grasp_alignment`; `carried_grasps`:
-    template methods also pair each place candidate with the demos' grasps carried from it,
-    `app.predict.carried_grasps`)."""
-    pred = _predict(t, cloud, method, T_base_fixture, directory, config, nif, feasible, reachable, carried_grasps)
+def predict(t: Task, cloud: np.ndarray, config: PredictConfig = PredictConfig(),
+            T_base_fixture: np.ndarray | None = None, reachable: Reach | None = None) -> Prediction:
+    """Grasp pose and place motion for a target cloud (N, 3) in the base frame, as `config` says
+    (`PredictConfig`: the method, the demos, other field weights, the imitation schedule, the
+    refinements); `T_base_fixture`: the real fixture's pose (default: the cell's layout); `reachable`:
+    whether the cell can put its gripper at a grasp pose - given, a template method's feasible grasps
+    are also ones it can reach."""
+    pred = _predict(t, cloud, config, method_record(config.method), T_base_fixture, reachable)
+    center, align = config.center, config.align
     pred.T_base_tcp = refine_grasp(pred.T_base_tcp, cloud, center=center, align=align)
     if center:
         seen = center_on_peg(pred.T_base_fixture_seen, cloud, fixture(t.fixture))
@@ -128,17 +126,18 @@ def refine_grasp(T_base_tcp: np.ndarray, cloud: np.ndarray, *, center: bool, ali
     return center_grasp(turned, cloud) if center else turned  # what lies between the fingers moved
 
 
-def _predict(t: Task, cloud: np.ndarray, method: str, T_base_fixture: np.ndarray | None, directory: Path | None,
-             config: ImitationConfig, nif: str | Path | None, feasible: bool = True,
-             reachable: Reach | None = None, carried_grasps: bool = False) -> Prediction:
+def _predict(t: Task, cloud: np.ndarray, settings: PredictConfig, m: Method, T_base_fixture: np.ndarray | None,
+             reachable: Reach | None = None) -> Prediction:
     """`predict` before the grasp is centred."""
-    key = check_method(method)
-    directory = directory or DEMOS_DIR / t.demos
+    directory = settings.demos or DEMOS_DIR / t.demos
     if T_base_fixture is None:
         T_base_fixture = CellLayout().fixture_pose(t.fixture)
-    if key == "cpd":
-        return _predict_cpd(method, t, cloud, T_base_fixture, directory)
-    query, feature = key.split("-")
+    if m.family is Family.REGISTRATION:
+        return _predict_cpd(settings.method, t, cloud, T_base_fixture, directory)
+    if not m.template:
+        raise ValueError(f"method {m.name} reads the simulator's true poses; it has no predictor from a cloud")
+    method, query, feature, nif = settings.method, m.query, m.feature, settings.fields
+    config, feasible, carried_grasps = settings.imitation, settings.feasible, settings.carried_grasps
     nearest = tuple(s for s in STAGES if config.demo_match(stage_anchor(t, s)) == "nearest")  # per-demo features
     templates = task_templates(t, directory, query, feature, nif=nif, per_demo=nearest)
     field = load_field(field_override(feature, nif) or FEATURES[feature])  # once for both templates
@@ -164,22 +163,21 @@ def _predict(t: Task, cloud: np.ndarray, method: str, T_base_fixture: np.ndarray
                       {"grasp": round(grasp.seconds, 3), "place": round(place.seconds, 3)}, pairs)
 
 
-def predict_place(t: Task, cloud: np.ndarray, T_base_tcp: np.ndarray, method: str = "nift",
-                  T_base_fixture: np.ndarray | None = None, directory: Path | None = None,
-                  config: ImitationConfig = ImitationConfig(), starts: np.ndarray | None = None,
-                  center: bool = True) -> list[Candidate]:
+def predict_place(t: Task, cloud: np.ndarray, T_base_tcp: np.ndarray, settings: PredictConfig = PredictConfig(),
+                  T_base_fixture: np.ndarray | None = None, starts: np.ndarray | None = None) -> list[Candidate]:
     """Place candidates, best first, for an object held by the grasp T_base_tcp, from a cloud (N, 3) of
     it as it stood when grasped (the second look's fused cloud, `app.jobs.second_look`): the place
     template imitated from random starts, from the demo's carry of this grasp
     (`app.predict.carried_grasps.carried_places`) and from `starts` (K, 4, 4), the places that carry
-    like the demos with this grasp preferred; none for a method without templates (cpd)."""
-    key = check_method(method)
-    if key == "cpd":
+    like the demos with this grasp preferred; none for a method without templates (cpd). The settings'
+    field weights are not used: the place is imitated on the template's own stored features."""
+    m = method_record(settings.method)
+    if not m.template:
         return []
-    directory = directory or DEMOS_DIR / t.demos
+    directory = settings.demos or DEMOS_DIR / t.demos
     T_base_fixture = CellLayout().fixture_pose(t.fixture) if T_base_fixture is None else T_base_fixture
-    query, feature = key.split("-")
-    template = task_templates(t, directory, query, feature)["place"]
+    config, center = settings.imitation, settings.center
+    template = task_templates(t, directory, m.query, m.feature)["place"]
     carried = demo_carries(task_demos(directory))
     begin = carried_places(T_base_tcp[None], carried)
     begin = begin if starts is None or len(starts) == 0 else np.concatenate([begin, starts])

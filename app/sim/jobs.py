@@ -17,10 +17,10 @@ from app.jobs.job import JobConfig, JobHooks, JobResult, Predictor, run_job
 from app.motion.scene import PlanningScene
 from app.objects import split
 from app.objects.library import LibraryObject
-from app.predict.methods import ORACLE
+from app.predict.methods import method as method_record
 from app.sim.cell import SimCell
 from app.sim.judges import resting_verdict
-from app.sim.oracle import REVOLUTION, TURNS, teacher_prediction
+from app.sim.oracle import REVOLUTION, TURNS, oracle_prediction
 from app.sim.snapshots import save_strip, snapshot
 from app.sim.spawn import SCALE_RANGE, SpawnedObject, release, spawn
 from app.tasks.task import Task
@@ -92,12 +92,12 @@ def start_job(cell: SimCell, spec: JobSpec) -> SpawnedObject:
     return spawn_test_object(cell.world, spec.task, spec.pose, np.random.default_rng(spec.seed), spec.source)
 
 
-def teacher_predictor(cell: SimCell, obj: SpawnedObject, t: Task) -> Predictor:
+def oracle_predictor(cell: SimCell, obj: SpawnedObject, t: Task) -> Predictor:
     """The oracle's poses for the object where it is when the job asks (after a miss it may have moved);
     for a body of revolution, its grasp turned about the object's axis too (`app.sim.oracle`)."""
     T_base_fixture = cell.config.fixture_pose(t.fixture)
     turns = TURNS if t.category in REVOLUTION else 1
-    return lambda cloud: teacher_prediction(t, obj.mesh, obj.scale, cell.world.pose(obj.body), T_base_fixture, turns)
+    return lambda cloud: oracle_prediction(t, obj.mesh, obj.scale, cell.world.pose(obj.body), T_base_fixture, turns)
 
 
 def run_sim_job(cell: SimCell, scene: PlanningScene, T_base_cam: np.ndarray, spec: JobSpec,
@@ -113,8 +113,8 @@ def run_sim_job(cell: SimCell, scene: PlanningScene, T_base_cam: np.ndarray, spe
         predictor = None
         if predictor_of is not None:
             predictor = predictor_of(obj)
-        elif config.method == ORACLE:
-            predictor = teacher_predictor(cell, obj, spec.task)
+        elif method_record(config.method).true_poses:
+            predictor = oracle_predictor(cell, obj, spec.task)
         result = run_job(spec.task, cell.arm, cell.gripper, cell.camera, T_base_cam, T_base_fixture, scene, config,
                          hooks, predictor)
         if not result.success:

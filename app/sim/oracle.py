@@ -21,7 +21,7 @@ def grasp_turns(turns: int) -> list[float]:
     return [0.0] + [sign * k * step for k in range(1, turns // 2 + 1) for sign in (1, -1)][: turns - 1]
 
 
-def teacher_prediction(t: Task, mesh: trimesh.Trimesh, scale: float, T_base_obj: np.ndarray,
+def oracle_prediction(t: Task, mesh: trimesh.Trimesh, scale: float, T_base_obj: np.ndarray,
                        T_base_fixture: np.ndarray, turns: int = 1) -> Prediction:
     """The teacher's poses as a Prediction: grasp T_base_obj @ T_obj_tcp; motion to the teacher's place.
     `turns` > 1 (bodies of revolution only): the same grasp turned about the object's axis are

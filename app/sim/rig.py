@@ -8,7 +8,7 @@ from __future__ import annotations
 from app.categories import POSES
 from app.sim.calibration import calibrate_sim_cell, result_record
 from app.sim.cell import SimCell
-from app.sim.jobs import JobSpec, SimHooks, start_job, teacher_predictor
+from app.sim.jobs import JobSpec, SimHooks, start_job, oracle_predictor
 from app.sim.spawn import release
 from app.tasks.task import TASKS, task
 from hardware.net import checks
@@ -38,7 +38,7 @@ class SimRig:
         return [bool(success), reason]
 
     def oracle(self) -> dict:
-        pred = teacher_predictor(self.cell, self._object(), self.task)(None)
+        pred = oracle_predictor(self.cell, self._object(), self.task)(None)
         return {"T_base_tcp": pred.T_base_tcp, "T_base_fixture_seen": pred.T_base_fixture_seen, "motion": pred.motion}
 
     def clear(self) -> None:

@@ -15,6 +15,7 @@ from typing import Callable
 import numpy as np
 import viser
 
+from app.failures import CellFailure
 from app.objects import generate
 from app.objects.library import load_object
 from app.teach.session import Step, TeachSession
@@ -115,7 +116,7 @@ class TeachPage:
             step = action()
             if step is not None:
                 self._say(step.message if step.ok else f"Not done: {step.message}")
-        except ValueError as exc:
+        except (ValueError, CellFailure) as exc:  # bad input, or what the cell could not do
             self._say(f"Not done: {exc}")
         except Exception as exc:  # noqa: BLE001 - a bug of ours: one line here, the traceback in the log
             log.exception("teach page: %s failed", label)

@@ -28,8 +28,9 @@ from typing import Callable
 
 import numpy as np
 
-from app.jobs.job import JOB_IMITATION
-from app.motion.ik import NoIKSolution, solve
+from app.predict.config import PredictConfig
+from app.failures import NoIKSolution, PerceptionFailure
+from app.motion.ik import solve
 from app.motion.scene import PlanningScene
 from app.objects import split
 from app.objects.library import LibraryObject
@@ -135,7 +136,7 @@ class TeachSession:
                         T_world_obj=at)
             try:
                 cloud = object_cloud(self.cell.camera.capture(), self.T_base_cam)
-            except ValueError as exc:
+            except PerceptionFailure as exc:
                 self.cell.world.remove(obj.body)
                 return Step(False, f"the camera does not see the object: {exc}")
             self.current = Taught(obj, cloud, self.cell.world.pose(obj.body))
@@ -248,8 +249,8 @@ class TeachSession:
             step = self.new_object("test")
             if not step.ok:
                 return step
-            self.prediction = predict(self.task, self.current.cloud, method, self.T_base_fixture, self.out,
-                                      JOB_IMITATION)
+            self.prediction = predict(self.task, self.current.cloud, PredictConfig(method=method, demos=self.out),
+                                      self.T_base_fixture)
             loss = {s: v[0] for s, v in self.prediction.losses.items() if v}
             return Step(True, f"{self.current.obj.label}: predicted grasp and place (template loss " +
                         ", ".join(f"{s} {v:.4f}" for s, v in loss.items()) + ")")
