@@ -18,12 +18,12 @@ from pathlib import Path
 import numpy as np
 
 from app.jobs.job import JobConfig
-from app.predict.config import PredictConfig
 from app.motion.scene import PlanningScene
+from app.predict.config import PredictConfig
 from app.predict.predict import predict
 from app.sim.calibration import ensure_calibration
 from app.sim.cell import CellConfig, SimCell
-from app.sim.jobs import JobSpec, run_sim_job, oracle_predictor
+from app.sim.jobs import JobSpec, oracle_predictor, run_sim_job
 from app.sim.judges import judge_place, judged_copy
 from app.tasks.task import task
 

@@ -61,7 +61,7 @@ parser.add_argument("--calibration", type=Path, default=None, help="camera calib
 args = parser.parse_args()
 job = JobConfig.of(args.method)
 if args.peg_clearance is not None:
-    job = replace(job, executor=replace(job.executor, peg_clearance=args.peg_clearance))
+    job = replace(job, motion=replace(job.motion, peg_clearance=args.peg_clearance))
 for name in ("release_clearance", "approach_clearance"):
     if getattr(args, name) is not None:
         job = replace(job, **{name: getattr(args, name)})

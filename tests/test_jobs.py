@@ -8,7 +8,7 @@ import pytest
 from app.jobs.job import JobConfig
 from app.motion.scene import PlanningScene
 from app.sim.cell import CellConfig, SimCell
-from app.sim.jobs import JobSpec, SimHooks, run_series, run_sim_job, oracle_predictor
+from app.sim.jobs import JobSpec, SimHooks, oracle_predictor, run_series, run_sim_job
 from app.tasks.task import task
 from hardware.se3 import make_pose
 
@@ -347,10 +347,10 @@ def test_a_mug_hung_at_its_hang_drags_on_the_peg_only_when_bullet_thickens_the_h
     """The oracle's mug of seed 5 placed at its hang (no clearance): at Bullet's default hull margin
     (1 mm) its handle's hole closes on the peg, the handle drags along the place line and the job
     fails; at the cell's 0.2 mm (`SimWorldConfig.mesh_margin`) the peg passes through and it hangs,
-    as it does placed `ExecutorConfig.peg_clearance` (12 mm) above and dropped."""
-    from app.motion.executor import ExecutorConfig
+    as it does placed `MotionConfig.peg_clearance` (12 mm) above and dropped."""
+    from app.motion.config import MotionConfig
 
-    at_hang = JobConfig.of("teacher", executor=ExecutorConfig(peg_clearance=0.0))
+    at_hang = JobConfig.of("teacher", motion=MotionConfig(peg_clearance=0.0))
     thick = replace(CellConfig(), world=replace(CellConfig().world, mesh_margin=0.001))
     assert not _sim(JobSpec(task("mug"), seed=5), at_hang, config=thick).success
     result = _sim(JobSpec(task("mug"), seed=5), at_hang)
@@ -443,10 +443,10 @@ def test_an_approach_that_meets_something_within_7_mm_of_its_end_closes_there_an
     from types import SimpleNamespace
 
     from app.jobs.job import APPROACH_ARRIVED, GraspMissed, JobResult, _guarded_approach
+    from hardware.se3 import ur_to_pose
     from hardware.sim.arm import SimArm, SimArmConfig
     from hardware.sim.robot import SimRobot
     from hardware.sim.world import SimWorld
-    from hardware.se3 import ur_to_pose
 
     world = SimWorld()
     arm = SimArm(SimArmConfig(), SimRobot(world))

@@ -2,8 +2,8 @@
 import numpy as np
 import pytest
 
-from app.motion.cartesian import MAX_JOINT_JUMP, line_path
 from app.failures import NoIKSolution, NoPath, PathCollides
+from app.motion.cartesian import MAX_JOINT_JUMP, line_path
 from app.motion.ik import IKConfig, reach_failure, solve
 from app.motion.scene import PlanningScene
 from app.motion.trajectory import path_timing, remainder, through_waypoints
@@ -303,7 +303,7 @@ def test_sampling_planner_refuses_a_colliding_goal_at_once_and_names_the_contact
 
 
 def test_transit_around_an_obstacle_is_collision_free_once_timed(kin, limits, scene):
-    from app.motion.executor import Planner
+    from app.motion.planner import Planner
 
     q0, q1, pillar = _pillar_between_two_reaches(kin)
     scene.add_cloud("pillar", pillar)
@@ -327,7 +327,7 @@ def test_upper_arm_below_horizontal_hits_the_table_not_its_own_base(scene):
 def test_a_carried_object_is_planned_around_what_the_empty_gripper_clears(kin, limits, scene):
     """A 15 cm post under a transit at 27 cm: the gripper passes over it, a 12 cm box held below the
     TCP would sweep through it - the planner refuses that path and finds one that clears it."""
-    from app.motion.executor import Planner
+    from app.motion.planner import Planner
     from app.motion.sampling import densify
 
     down = kin.fk(HOME_Q)[:3, :3]
@@ -430,7 +430,8 @@ def test_a_blocked_approach_line_is_replaced_by_a_shorter_one_that_keeps_the_gra
     alternatives it fails at the approach."""
     from dataclasses import replace
 
-    from app.motion.executor import ExecutorConfig, Planner
+    from app.motion.config import MotionConfig
+    from app.motion.planner import Planner
 
     tilted = rotvec_to_matrix([0.0, np.pi / 4, 0.0]) @ rotvec_to_matrix([np.pi, 0, 0])  # the lift is not the approach
     T_grasp = make_pose(tilted, [0.5, 0.05, 0.15])
@@ -449,7 +450,7 @@ def test_a_blocked_approach_line_is_replaced_by_a_shorter_one_that_keeps_the_gra
     assert np.allclose(start[:3, 3], [0.0, 0.0, -0.06], atol=1e-4)
     assert np.allclose(kin.fk(approach.end), plan.T_base_grasp, atol=1e-4)
     assert not any("box" in h for q in approach.q for h in collisions(q))
-    only_default = replace(ExecutorConfig(), shorter=(), approach_cone=0.0)
+    only_default = replace(MotionConfig(), shorter=(), approach_cone=0.0)
     with pytest.raises(PathCollides, match="approach: collision .*gripper_palm-box"):
         Planner(kin, limits, scene, only_default).pick_place(HOME_Q, T_grasp, T_place, np.array([0.0, 0.0, 1.0]))
 
@@ -457,7 +458,7 @@ def test_a_blocked_approach_line_is_replaced_by_a_shorter_one_that_keeps_the_gra
 def test_a_blocked_lift_is_replaced_by_one_tilted_off_vertical(kin, limits, scene):
     """A stand-in obstacle fills the vertical line 4-14 cm above the grasp (within 8 mm of it): the full
     and the shorter lifts (12, 7.2, 4.8 cm) enter it, one 15 degrees off vertical passes beside it."""
-    from app.motion.executor import Planner
+    from app.motion.planner import Planner
 
     T_grasp = make_pose(rotvec_to_matrix([np.pi, 0, 0]), [0.5, 0.05, 0.15])
     T_place = make_pose(rotvec_to_matrix([np.pi, 0, 0]), [0.45, -0.15, 0.15])
@@ -477,10 +478,11 @@ def test_a_blocked_lift_is_replaced_by_one_tilted_off_vertical(kin, limits, scen
 
 
 def test_line_alternatives_are_the_axis_shorter_and_a_cone_of_six_about_it():
-    from app.motion.executor import ExecutorConfig, line_offsets
+    from app.motion.config import MotionConfig
+    from app.motion.planner import line_offsets
 
     axis = np.array([0.3, -0.5, 0.8]) / np.linalg.norm([0.3, -0.5, 0.8])
-    offsets = np.array(line_offsets(axis, 0.1, ExecutorConfig()))  # (9, 3)
+    offsets = np.array(line_offsets(axis, 0.1, MotionConfig()))  # (9, 3)
     np.testing.assert_allclose(offsets[:3], np.outer([1.0, 0.6, 0.4], 0.1 * axis), atol=1e-12)
     cone = offsets[3:] / 0.1
     np.testing.assert_allclose(np.linalg.norm(cone, axis=1), 1.0, atol=1e-12)
@@ -494,7 +496,7 @@ def test_line_alternatives_are_the_axis_shorter_and_a_cone_of_six_about_it():
 def test_a_pick_alone_ends_at_the_lift_and_its_place_planned_from_there_ends_at_the_place(kin, limits, scene):
     """pick_place with no place plans to the pre-grasp, the approach and the lift only; place_from at the
     lift's end (as after the second look) then carries the held grasp to the place and goes home."""
-    from app.motion.executor import Planner
+    from app.motion.planner import Planner
 
     T_grasp = make_pose(rotvec_to_matrix([np.pi, 0, 0]), [0.5, 0.05, 0.15])
     T_place = make_pose(rotvec_to_matrix([np.pi, 0, 0]), [0.45, -0.15, 0.15])
@@ -544,7 +546,8 @@ def test_a_segment_starts_where_a_sagging_arm_stands_and_a_far_one_is_still_refu
 
 
 def test_an_arm_pushed_off_a_trajectorys_start_is_brought_back_and_one_close_by_is_left_alone():
-    from app.motion.executor import JointTrajectory, back_to_start
+    from app.motion.executor import back_to_start
+    from app.motion.trajectory import JointTrajectory
     from hardware.sim.arm import SimArm, SimArmConfig
     from hardware.sim.robot import SimRobot
     from hardware.sim.world import SimWorld
@@ -568,7 +571,7 @@ def test_a_sampled_path_whose_default_timing_leaves_its_segments_is_timed_straig
     """A planner whose every state off the sampled segments is 'in collision' (what a narrow passage
     is): the direct move and the default timing of the sampled path fail, the straight timing of the
     same waypoints is taken."""
-    import app.motion.executor as ex
+    import app.motion.planner as ex
 
     q0 = np.array(HOME_Q)
     via = q0 + [0.8, -0.3, 0.5, 0.9, 0.2, 1.5]
@@ -601,7 +604,7 @@ def _side_grasp(kin):
 
 
 def test_the_carry_constraint_bounds_the_turn_about_the_fingers_axis_and_no_other(kin):
-    from app.motion.executor import held_without_pivot
+    from app.motion.planner import held_without_pivot
 
     T0, q0 = _side_grasp(kin)
     turned = lambda rotvec: kin.ik(T0 @ make_pose(rotvec_to_matrix(rotvec)), q0)  # noqa: E731
@@ -621,7 +624,7 @@ def test_the_sampling_planner_keeps_a_path_constraint_on_every_state(kin, limits
     """Two reaches whose direct joint path passes the elbow over 1.2 rad; the constraint forbids that
     on the middle third of the base's turn: the planner finds a way with the elbow bent less, and the
     timed transit keeps it at every sample."""
-    from app.motion.executor import Planner
+    from app.motion.planner import Planner
     from app.motion.sampling import densify, plan_joint_path
 
     q0, q1, _ = _pillar_between_two_reaches(kin)
@@ -638,18 +641,20 @@ def test_the_sampling_planner_keeps_a_path_constraint_on_every_state(kin, limits
 
 def test_a_carry_that_cannot_keep_the_object_from_pivoting_is_planned_without_the_constraint(kin, limits, scene,
                                                                                             monkeypatch):
-    import app.motion.executor as executor
+    import app.motion.planner as planner_module
+    from app.motion.config import MotionConfig
+    from app.motion.sampling import SamplingConfig
 
     T0, q0 = _side_grasp(kin)
     q1 = kin.ik(make_pose(t=[0.0, -0.15, 0.0]) @ T0, q0)
     assert not scene.collisions(q0) and not scene.collisions(q1)
-    planner = executor.Planner(kin, limits, scene, executor.ExecutorConfig(
-        sampling=executor.SamplingConfig(states=2_000)))
+    planner = planner_module.Planner(kin, limits, scene, MotionConfig(
+        sampling=SamplingConfig(states=2_000)))
     lever = 0.1  # m: a bottle held at its neck
     traj, kept = planner.carry(q0, q1, lever=lever)
     assert kept and np.allclose(traj.q[-1], q1, atol=1e-6)
     ends_only = lambda kin_, a, b, extra: (lambda q: bool(np.allclose(q, a) or np.allclose(q, b)))  # noqa: E731
-    monkeypatch.setattr(executor, "held_without_pivot", ends_only)  # nothing between the ends is allowed
+    monkeypatch.setattr(planner_module, "held_without_pivot", ends_only)  # nothing between the ends is allowed
     with pytest.raises(NoPath, match="constrained"):
         planner.transit(q0, q1, "carry", allowed=ends_only(kin, q0, q1, 0.0))
     traj, kept = planner.carry(q0, q1, lever=lever)  # the constraint cannot be kept: planned as any transit
@@ -658,7 +663,7 @@ def test_a_carry_that_cannot_keep_the_object_from_pivoting_is_planned_without_th
 
 
 def test_the_held_lever_is_the_centroids_distance_from_the_fingers_axis(kin, limits, scene):
-    from app.motion.executor import OBJECT, Planner
+    from app.motion.planner import OBJECT, Planner
 
     T_grasp, _ = _side_grasp(kin)  # the tool's x up, y (the fingers' axis) along the base's y
     planner = Planner(kin, limits, scene)
@@ -677,7 +682,7 @@ def test_a_carry_that_may_pivot_the_object_sends_the_planner_to_the_other_half_t
                                                                                    pivots_on):
     """The first half-turn's carry cannot keep the object from pivoting: the other half-turn is planned
     and taken when its carry can; when neither can, the first is kept, with the note."""
-    from app.motion.executor import CARRY_MAY_PIVOT, HALF_TURN, Planner
+    from app.motion.planner import CARRY_MAY_PIVOT, HALF_TURN, Planner
 
     T_grasp = make_pose(rotvec_to_matrix([np.pi, 0, 0]), [0.5, 0.05, 0.15])
     T_place = make_pose(rotvec_to_matrix([np.pi, 0, 0]), [0.45, -0.15, 0.15])
@@ -698,21 +703,23 @@ def test_an_object_held_near_its_centroid_gets_a_short_search_for_a_carry_that_k
     """A carry whose direct path stands the object on its head (the wrist's last joint a full turn):
     the constrained search runs for `short_lever_search` for a mug held at its rim, for the planner's
     full time for a bottle held at its neck, and only the latter's fallback is noted."""
-    import app.motion.executor as executor
+    import app.motion.planner as planner_module
+    from app.motion.config import MotionConfig
+    from app.motion.sampling import SamplingConfig
 
     T0, q0 = _side_grasp(kin)
     q1 = q0.copy()
     q1[5] -= 2 * np.pi  # the same pose, the tool turned once about its axis on the way
     budgets = []
-    real = executor.plan_joint_path
+    real = planner_module.plan_joint_path
 
-    def spy(scene_, a, b, ignore=(), config=executor.SamplingConfig(), allowed=None):
+    def spy(scene_, a, b, ignore=(), config=SamplingConfig(), allowed=None):
         budgets.append((config.states, allowed is not None))
         return real(scene_, a, b, ignore, config, allowed)
 
-    monkeypatch.setattr(executor, "plan_joint_path", spy)
-    config = executor.ExecutorConfig(sampling=executor.SamplingConfig(states=5_000))
-    planner = executor.Planner(kin, limits, scene, config)
+    monkeypatch.setattr(planner_module, "plan_joint_path", spy)
+    config = MotionConfig(sampling=SamplingConfig(states=5_000))
+    planner = planner_module.Planner(kin, limits, scene, config)
     for lever, budget, noted in ((0.04, config.short_lever_search, False), (0.11, 5_000, True)):
         budgets.clear()
         traj, kept = planner.carry(q0, q1, lever=lever)

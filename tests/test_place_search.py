@@ -5,8 +5,8 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from app.jobs.guarded import PLACE_ARRIVED, SEARCH_RINGS, guarded_leave, search_offsets, search_place
 from app.failures import ContactStop, ProtectiveStop
+from app.jobs.guarded import PLACE_ARRIVED, SEARCH_RINGS, guarded_leave, search_offsets, search_place
 from app.motion.trajectory import joint_segment
 from hardware.kinematics import UR5Kinematics
 from hardware.robot_description import HOME_Q
@@ -112,7 +112,7 @@ def test_a_way_out_that_meets_something_stops_opens_fully_and_carries_on(guarded
         home = joint_segment(retreat.end, q0, arm.joint_limits, 0.3, 1.0, "home")
         bar = T0[:3, 3] + 0.025 * T0[:3, 1] + [0.0, 0.07, 0.01]  # 14-36 mm along the fingers' axis, below the palm:
         world.add_box((0.022, 0.02, 0.03), bar)  # a finger 20-32 mm out meets it, both 42-55 mm out straddle it
-        config = SimpleNamespace(leave_contact_force=30.0, executor=SimpleNamespace(end_tolerance=0.02))
+        config = SimpleNamespace(leave_contact_force=30.0, motion=SimpleNamespace(end_tolerance=0.02))
         job = SimpleNamespace(arm=arm, gripper=gripper, kin=kin, guards_hang=lambda: guarded, config=config,
                               result=SimpleNamespace(notes=[]))
         if not guarded:

@@ -6,8 +6,7 @@ import pytest
 from app.failures import OutOfJointLimits
 from app.jobs.second_look import to_grasp_frame, view_q
 from app.nift.imitate import Imitation
-from app.predict.carried_grasps import (carried_grasps, carried_pairs,
-                                        carried_places, medoid)
+from app.predict.carried_grasps import carried_grasps, carried_pairs, carried_places, medoid
 from hardware.gripper_geometry import GripperGeometry
 from hardware.interfaces import JointLimits
 from hardware.se3 import invert, make_pose, random_rotations
@@ -94,7 +93,7 @@ def test_the_second_look_fuses_a_held_mug_onto_its_mesh_without_the_gripper(monk
     from app.jobs.job import JobConfig
     from app.motion.scene import PlanningScene
     from app.sim.cell import CellConfig, SimCell
-    from app.sim.jobs import JobSpec, SimHooks, run_sim_job, oracle_predictor
+    from app.sim.jobs import JobSpec, SimHooks, oracle_predictor, run_sim_job
     from app.tasks.task import task
 
     seen = {}

@@ -9,8 +9,8 @@ from typing import Callable
 import numpy as np
 
 from app.bench.memory import growth_across_refreshes, growth_mb_per_job, resident_mb
-from app.io_utils import write_json
 from app.failures import INTERNAL_ERROR, NoDemoLikeGrasp
+from app.io_utils import write_json
 from app.jobs.job import JobConfig, JobResult
 from app.motion.scene import PlanningScene
 from app.sim.cell import CellConfig, SimCell

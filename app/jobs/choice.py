@@ -20,8 +20,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from app.failures import NoCandidate, NoDemoLikeGrasp, PlanningFailure
-from app.motion.executor import HALF_TURN, FingerWidths, PickPlacePlan, Planner
 from app.motion.ik import Blocked
+from app.motion.planner import HALF_TURN, FingerWidths, PickPlacePlan, Planner
 from app.predict.candidates import Candidate
 from hardware.se3 import pose_to_ur
 

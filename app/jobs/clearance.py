@@ -9,7 +9,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from app.motion.executor import OBJECT
+from app.motion.planner import OBJECT
 from app.motion.scene import PlanningScene
 from app.predict.predict import refine_grasp
 from app.predict.table_clearance import backed_off_table

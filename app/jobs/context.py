@@ -61,9 +61,9 @@ class JobContext:
 
     @cached_property
     def T_base_fixture_placed(self) -> np.ndarray:
-        """The fixture's pose that places are planned for: moved clear of a peg by the executor's
+        """The fixture's pose that places are planned for: moved clear of a peg by the motion settings'
         `peg_clearance` and `peg_short` (`app.motion.place_line.above_peg`); other fixtures as they are."""
-        e = self.config.executor
+        e = self.config.motion
         return above_peg(self.T_base_fixture, self.t.fixture, e.peg_clearance, e.peg_short)
 
     @cached_property
@@ -98,5 +98,5 @@ class JobContext:
             if c.place_rank < 0:
                 return fixture_approach(self.T_base_fixture, self.t.fixture)
             return peg_line_direction(transform_points(c.motion, cloud), self.T_base_fixture, self.t.fixture,
-                                      self.config.executor.place_distances[0])
+                                      self.config.motion.place_distances[0])
         return direction

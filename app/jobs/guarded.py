@@ -39,7 +39,7 @@ def guarded_line(job: JobContext, line, force: float) -> tuple[float | None, str
     any other stop."""
     job.arm.startContactDetection(force)
     try:
-        execute(job.arm, line, job.config.executor.end_tolerance)
+        execute(job.arm, line, job.config.motion.end_tolerance)
         return None, ""
     except ExecutionFailure as exc:
         if not job.arm.readContactDetection():
@@ -69,7 +69,7 @@ def guarded_leave(job: JobContext, leave: list) -> None:
     runs under contact detection: fingers that meet the mug they let go (which an unguarded way out drags
     into a protective stop) stop the arm at rest, the gripper opens fully (2 cm more on
     each side), and the arm carries on along the planned way out from where it stopped."""
-    tolerance = job.config.executor.end_tolerance
+    tolerance = job.config.motion.end_tolerance
     if not job.guards_hang():
         for segment in leave:
             execute(job.arm, segment, tolerance)

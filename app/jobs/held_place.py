@@ -7,11 +7,11 @@ from dataclasses import replace
 
 import numpy as np
 
+from app.failures import NoCandidate, PerceptionFailure, PlanningFailure
 from app.jobs.context import JobContext
 from app.jobs.record import check_held, ur
 from app.jobs.second_look import second_look
-from app.motion.executor import OBJECT, FingerWidths, Planner
-from app.failures import NoCandidate, PerceptionFailure, PlanningFailure
+from app.motion.planner import OBJECT, FingerWidths, Planner
 from app.perception import resample
 from app.predict.candidates import Candidate
 from app.predict.hole_places import with_hole_pairs
@@ -31,7 +31,7 @@ def look_and_place(job: JobContext, planner: Planner, plan, chosen: Candidate, o
         holes = [(c, cloud, False) for c in first if c.place_rank < 0]  # the first look's hole places, first
         try:
             views = second_look(job.arm, job.camera, planner, job.T_base_cam, job.points, T_grasp, width,
-                                job.config.executor.end_tolerance, job.config.look, job.config.perception)
+                                job.config.motion.end_tolerance, job.config.look, job.config.perception)
         except (PerceptionFailure, PlanningFailure) as exc:  # nothing seen, or no way to show it: the first look
             views, look = None, {"used": False, "why": str(exc)}
         check_held(job.gripper, "second look")

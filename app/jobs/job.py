@@ -29,19 +29,20 @@ from dataclasses import replace
 import numpy as np
 
 from app.categories import REVOLUTION
+from app.failures import INTERNAL_ERROR, CellFailure, GraspMissed, NoCandidate, PlaceFailed, PlaceMissed, ReleaseJammed
 from app.jobs.check import sighting
 from app.jobs.choice import choose, describe
 from app.jobs.clearance import gripper_clear
 from app.jobs.context import JobContext, Predictor
 from app.jobs.guarded import guarded_leave, guarded_line, guarded_place
 from app.jobs.held_place import look_and_place
-from app.failures import (INTERNAL_ERROR, CellFailure, GraspMissed, NoCandidate, PlaceFailed, PlaceMissed,
-                          ReleaseJammed)
 from app.jobs.record import STAGES, JobHooks, JobResult, check_held, ur
 from app.jobs.settings import JobConfig, looks_again
-from app.motion.executor import OBJECT, FingerWidths, Planner, back_to_start, execute, motion_failure, reverse
+from app.motion.executor import back_to_start, execute, motion_failure
 from app.motion.ik import reach_failure
+from app.motion.planner import OBJECT, FingerWidths, Planner
 from app.motion.scene import PlanningScene
+from app.motion.trajectory import reverse
 from app.nift.imitate import use_threads
 from app.perception import object_points, resample
 from app.predict.candidates import Candidate
@@ -90,7 +91,7 @@ def run_job(t: Task, arm: Arm, gripper: Gripper, camera: DepthCamera, T_base_cam
     if predictor is None:
         def predictor(cloud: np.ndarray) -> Prediction:
             return predict(t, cloud, settings, T_base_fixture,
-                           gripper_clear(scene, cloud, config.table_z, config.executor.approach_distance,
+                           gripper_clear(scene, cloud, config.table_z, config.motion.approach_distance,
                                          settings.center, settings.align))
     try:
         _run(JobContext(t, arm, gripper, camera, T_base_cam, T_base_fixture, scene, kin, config, hooks, predictor,
@@ -109,7 +110,7 @@ def run_job(t: Task, arm: Arm, gripper: Gripper, camera: DepthCamera, T_base_cam
 
 
 def _run(job: JobContext) -> None:
-    planner = Planner(job.kin, job.arm.joint_limits, job.scene, job.config.executor)
+    planner = Planner(job.kin, job.arm.joint_limits, job.scene, job.config.motion)
     options, seen = None, None
     for attempt in range(1, job.config.attempts + 1):
         last = attempt == job.config.attempts
@@ -211,7 +212,7 @@ def _plan(job: JobContext, planner: Planner, options: list, cloud: np.ndarray):
 
 def _pick(job: JobContext, plan, planner: Planner) -> None:
     """Approach, close, lift; GraspMissed when nothing is held after closing or after the lift."""
-    tolerance = job.config.executor.end_tolerance
+    tolerance = job.config.motion.end_tolerance
     with job.stage("approach"):
         job.gripper.open(width=plan.widths.approach if plan.widths else None)
         execute(job.arm, plan.segment("to pre-grasp"), tolerance)
@@ -251,28 +252,28 @@ def _carry(job: JobContext, plan) -> None:
     """Carry to the pre-place; GraspMissed when the object slipped out on the way (it lies somewhere
     in the cell now: the next attempt looks for it again)."""
     with job.stage("carry"):
-        execute(job.arm, plan.segment("carry"), job.config.executor.end_tolerance)
+        execute(job.arm, plan.segment("carry"), job.config.motion.end_tolerance)
         check_held(job.gripper, "carry")
 
 
 def _recover(job: JobContext, planner: Planner, pick) -> None:
     """After a miss: open, back off along the approach (when still at the grasp), go home (`pick`: the
     plan the grasp was made with)."""
-    tolerance = job.config.executor.end_tolerance
+    tolerance = job.config.motion.end_tolerance
     with job.stage("recover"):
         job.gripper.open()
         q = job.arm.getActualQ()
         if np.abs(q - pick.segment("lift").q[0]).max() < tolerance:
             execute(job.arm, reverse(pick.segment("approach")), tolerance)
         job.scene.remove(OBJECT)  # it may have moved; the next look adds it again
-        home = np.asarray(job.config.executor.home_q)
+        home = np.asarray(job.config.motion.home_q)
         execute(job.arm, planner.transit(job.arm.getActualQ(), home, "recover"), tolerance)
 
 
 def _place(job: JobContext, planner: Planner, plan, sent: np.ndarray, again: bool = False) -> None:
     """Place, release, retreat, verify (`sent`: the observed cloud moved where it should end); PlaceMissed
     when the camera sees nothing new where the object was sent and the job may try `again`."""
-    tolerance = job.config.executor.end_tolerance
+    tolerance = job.config.motion.end_tolerance
     with job.stage("place"):
         if job.guards_hang():
             short = guarded_place(job, plan.segment("place"))

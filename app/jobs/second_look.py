@@ -22,7 +22,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from app.failures import OutOfJointLimits
-from app.motion.executor import OBJECT, Planner, execute
+from app.motion.executor import execute
+from app.motion.planner import OBJECT, Planner
 from app.perception import PerceptionConfig, held_object_cloud
 from hardware.interfaces import Arm, DepthCamera, JointLimits
 from hardware.se3 import invert, transform_points

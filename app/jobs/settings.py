@@ -4,7 +4,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from app.jobs.second_look import SecondLookConfig
-from app.motion.executor import ExecutorConfig
+from app.motion.config import MotionConfig
 from app.objects import fixture
 from app.perception import PerceptionConfig
 from app.predict.config import PredictConfig
@@ -44,7 +44,7 @@ class JobConfig:
                                                            z_range=(-0.03, 0.30))
     # the look for an object that fell off its fixture: the table around the fixture too, the fixtures' own points
     # left out; below the arm's elbow at home (it shows at x 0.27, z 0.35-0.40)
-    executor: ExecutorConfig = ExecutorConfig()
+    motion: MotionConfig = MotionConfig()
 
     def __post_init__(self) -> None:
         check_ranges(self, RANGES)

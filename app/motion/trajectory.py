@@ -104,3 +104,8 @@ def remainder(traj: JointTrajectory, q: np.ndarray, limits: JointLimits, speed: 
     if length < 1e-9:
         return JointTrajectory(np.zeros(2), np.vstack([q, q]), np.zeros((2, len(q))), traj.label)
     return path_timing(path, length, limits, speed, acceleration, float(np.min(limits.jerk)), traj.label)
+
+
+def reverse(traj: JointTrajectory) -> JointTrajectory:
+    """The same path run backwards (a rest-to-rest profile is time-symmetric)."""
+    return JointTrajectory(traj.times, traj.q[::-1].copy(), -traj.qd[::-1].copy(), traj.label)

@@ -28,13 +28,13 @@ from typing import Callable
 
 import numpy as np
 
-from app.predict.config import PredictConfig
 from app.failures import NoIKSolution, PerceptionFailure
 from app.motion.ik import solve
 from app.motion.scene import PlanningScene
 from app.objects import split
 from app.objects.library import LibraryObject
 from app.perception import object_cloud
+from app.predict.config import PredictConfig
 from app.predict.predict import Prediction, predict
 from app.sim.cell import SimCell, add_fixtures
 from app.sim.judges import Verdict, judge_grasp, judge_place, judged_copy

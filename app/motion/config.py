@@ -1,0 +1,40 @@
+"""The settings of a pick-and-place motion (`MotionConfig`): distances, speeds, tolerances, IK and the
+sampling planner. No heavy imports."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from app.motion.ik import IKConfig
+from app.motion.sampling import SamplingConfig
+from hardware.robot_description import HOME_Q
+
+
+@dataclass(frozen=True)
+class MotionConfig:
+    """Distances, speeds and tolerances of a pick-and-place motion (TOML table `[job.motion]`)."""
+
+    approach_distance: float = 0.10  # m, pre-grasp back along the tool's approach (z) axis
+    shorter: tuple[float, ...] = (0.6, 0.4)  # fractions of the approach and the lift tried when a line fails
+    approach_cone: float = 15.0  # degrees off the axis of the approaches tried after those
+    lift_height: float = 0.12  # m, straight up after the grasp
+    place_distances: tuple[float, ...] = (0.10, 0.20)  # m, pre-place back along the fixture's approach direction:
+    # the first where the held object's hull is clear of the cell (the hull fills a mug's handle, which hangs on the peg)
+    peg_clearance: float = 0.012  # m the object is placed above its hang on a peg, and dropped (app.motion.place_line):
+    # at 6 mm a mug turned 1-6 degrees in the grasp on the way rested its handle on the peg and fell (5 of 50)
+    peg_short: float = 0.0  # m the object is placed short of its hang, out along the peg
+    retreat_distance: float = 0.10  # m, back along the tool axis after release
+    carry_pivot: float = 45.0  # degrees gravity may turn about the fingers' axis on the carry (`held_without_pivot`)
+    pivot_lever: float = 0.065  # m: a held object's centroid this far from the fingers' axis or farther: the planner's full
+    # search for a carry that keeps it from pivoting, else a short one:
+    short_lever_search: int = 1_200  # states of constrained search for an object held nearer its centroid (about 0.2 s)
+    joint_speed: float = 1.05  # rad/s on transits (ur_rtde's moveJ default)
+    joint_acceleration: float = 1.4  # rad/s^2
+    line_speed: float = 0.15  # m/s on straight lines
+    line_acceleration: float = 0.6  # m/s^2
+    line_jerk: float = 5.0  # m/s^3
+    check_every: int = 5  # collision-check every n-th transit sample (20 ms at 250 Hz)
+    end_tolerance: float = 0.02  # rad: a segment that ends farther than this from its target failed
+    ik_candidates: int = 8  # IK branches tried at the grasp and at the place before giving up (all of them)
+    home_q: tuple[float, ...] = tuple(HOME_Q)
+    ik: IKConfig = IKConfig()
+    sampling: SamplingConfig = SamplingConfig()
