@@ -21,6 +21,7 @@ FLOORS = {  # module prefix -> floor; the longest matching prefix decides
     "hardware": 1,
     "hardware.sim": 2,
     "hardware.net": 1,  # device servers and clients: the interfaces, never the simulator
+    "hardware.fake": 1,  # fake devices over a kinematic world: the interfaces, never the simulator
     "calibration": 3,
     "app": 4, "app.io_utils": 4, "app.config": 4, "app.categories": 4, "app.cloud_io": 4,
     "app.nift": 5,

@@ -19,7 +19,7 @@ initialisation has improved its loss by `tolerance` (relative) for `patience` st
 final loss wins. Our addition: the step size decays (cosine) to 5 % of lr by the last
 iteration - with a constant 1e-2 the pose keeps jittering by millimetres around the optimum
 (measured on a demo's own cloud with an early NIF checkpoint: 9 mm / 9 degrees constant,
-0.1 mm / 0.1 degrees decayed; scripts/diagnose_self_imitation.py).
+0.1 mm / 0.1 degrees decayed; scripts/diagnose/diagnose_self_imitation.py).
 Optional (`prune_every`, our addition, on by default): drop the worse half of the initialisations
 every so many steps, down to `keep`; while more than `keep` are alive (exploration), the loss is
 taken over a fixed random subset of `explore_points` template points, then over all of them

@@ -3,7 +3,7 @@
 Our addition (not in the paper), applied to every method alike, like `app.predict.grasp_centering`. In the
 fused bench the lowest-loss NIFT rim grasps of mugs and bowls came tilted 11-28 degrees off the
 rim's wall: the flat pads then touch the wall along an edge and the object slips out on the lift
-(traced on 16 upright trials that failed: turned as below, 15 held; `scripts/diagnose_grasp_slips.py`).
+(traced on 16 upright trials that failed: turned as below, 15 held; `scripts/diagnose/diagnose_grasp_slips.py`).
 Antipodal grasp planners score the same thing - the closing axis against the contact normals.
 
 With S the cloud points inside the volume the closing fingers sweep (`swept_mask`) and n_p their
@@ -17,7 +17,7 @@ and the gripper turns about its TCP by the smallest rotation taking its closing 
 
 It needs normals that are right: on fused clouds the teacher's own (square) bowl and mug grasps
 turn by a median of 3-7 degrees (at most 18), on one Kinect view's by 2-10 (at most 89), and there
-it lost more grasps than it mended (docs/additions.md, "Grasp alignment"; `scripts/diagnose_grasp_alignment.py`)
+it lost more grasps than it mended (docs/additions.md, "Grasp alignment"; `scripts/diagnose/diagnose_grasp_alignment.py`)
 - so callers turn it on for fused clouds only.
 """
 from __future__ import annotations

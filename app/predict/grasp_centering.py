@@ -5,7 +5,7 @@ to touch pushes until the other touches. The benchmark's teleported judge (NDF's
 the object while the fingers close, and our fingers - like a Panda's or a Robotiq's - cannot pass
 the centre line, so there both fingers touch only if the TCP lies inside the gripped material
 (the scripted teacher's bowl grasp moved 5 mm away from the bowl's axis held on 1 of 4 test
-bowls, 10 mm towards it on 0 of 4: `scripts/diagnose_grasp_tolerance.py`;
+bowls, 10 mm towards it on 0 of 4: `scripts/diagnose/diagnose_grasp_tolerance.py`;
 `tests/test_grasp_centering.py` checks 8 mm).
 This step does in software what the closing would do on a real cell - and so does not push the
 object there either: with x along the finger width, y the closing axis and z the approach (TCP

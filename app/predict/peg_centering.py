@@ -3,7 +3,7 @@
 Our addition (not in the paper), the place's counterpart of `app.predict.grasp_centering`. On the rack the
 imitated pose pins the mug's handle hole well across the hole (a few millimetres) but poorly along
 its long axis: the hole is 3-6 cm long there and the field's features change slowly along it, so the
-hole's centre ended 15-35 mm off the peg in most failed hangs (`scripts/diagnose_peg_centering.py`).
+hole's centre ended 15-35 mm off the peg in most failed hangs (`scripts/diagnose/diagnose_peg_centering.py`).
 The cloud shows where the hole is: in the fixture's frame, with the peg from origin o along d, the
 "up" direction across it e_1 (world z minus its part along d) and e_2 = d x e_1, take the cloud
 points in the peg's lane - along the peg, level with its axis, within reach:

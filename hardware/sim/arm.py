@@ -10,6 +10,7 @@ external force on the tool passes `contact_detection_force`.
 """
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -67,6 +68,7 @@ class SimArm(Arm):
         self.max_force_change = 0.0  # N, largest change of the tool's force since contact detection started,
         # held for `contact_detection_time` (what a threshold that large would have stopped on)
         self._recent_changes: list[float] = []
+        self.on_stop: list[Callable[[str], None]] = []  # called with the reason whenever a motion halts (diagnostics)
         k = robot.kinematics
         self._limits = JointLimits(k.lower.copy(), k.upper.copy(), k.velocity_limit.copy(),
                                    JOINT_ACCELERATION_LIMIT.copy(), JOINT_JERK_LIMIT.copy())
@@ -277,7 +279,7 @@ class SimArm(Arm):
             try:
                 q_des, qd_des = target(min(i * dt, duration))
             except _NoIK as exc:
-                return self._halt(str(exc))
+                return self._halt(str(exc), protective=False)
             if i * dt > duration:
                 qd_des = np.zeros(6)
             self.robot.command_arm(q_des, qd_des)
@@ -285,12 +287,12 @@ class SimArm(Arm):
             error = np.abs(self.robot.arm_state()[0] - q_des).max()
             self.max_tracking_error = max(self.max_tracking_error, error)
             if error > self.config.tracking_error_limit:
-                return self._halt(f"protective stop: tracking error {error:.3f} rad")
+                return self._halt(f"protective stop: tracking error {error:.3f} rad", protective=True)
             if i % 8 == 0 and (force := self._arm_contact_force()) > self.config.contact_force_limit:
-                return self._halt(f"protective stop: {force:.0f} N contact on the arm")
+                return self._halt(f"protective stop: {force:.0f} N contact on the arm", protective=True)
             if self._detecting and (change := self._force_change()) is not None:
                 self._contact_detected = True
-                return self._halt(f"contact detected: the force on the tool changed by {change:.0f} N")
+                return self._halt(f"contact detected: the force on the tool changed by {change:.0f} N", protective=False)
         return True
 
     def _force_change(self) -> float | None:
@@ -306,10 +308,12 @@ class SimArm(Arm):
         self.max_force_change = max(self.max_force_change, held)
         return change if held > self._detection_force else None
 
-    def _halt(self, reason: str) -> bool:
+    def _halt(self, reason: str, protective: bool) -> bool:
+        """End the motion at rest; `protective`: in a protective stop. Tells `on_stop` why."""
         self._last_error = reason
-        if reason.startswith("protective stop"):
-            self._stopped = True
+        self._stopped = self._stopped or protective
+        for listener in self.on_stop:
+            listener(reason)
         q = self.robot.arm_state()[0]
         self.robot.command_arm(q, np.zeros(6))
         self.robot.world.step(int(0.1 / self.robot.world.config.time_step))

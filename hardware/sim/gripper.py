@@ -19,6 +19,7 @@ class SimGripperConfig:
 
     timeout: float = 2.0  # s allowed for an open or close
     settle_speed: float = 1e-3  # m/s: fingers slower than this have stopped
+    forget_contacts: bool = True  # drop the fingers' kept contact points as they open (`_forget_finger_contacts`)
 
     def __post_init__(self) -> None:
         check_ranges(self, (("timeout", 0.0, 60.0, "s", False), ("settle_speed", 0.0, 1.0, "m/s", False)))
@@ -64,7 +65,8 @@ class SimGripper(Gripper):
         if width is not None and not 0.0 < width <= self.stroke:
             raise ValueError(f"gripper opening must be in (0, {self.stroke}] m, got {width}")
         self._detected = False
-        self._forget_finger_contacts()
+        if self.config.forget_contacts:
+            self._forget_finger_contacts()
         self._drive((self.stroke if width is None else width) / 2, self.max_force, speed)
 
     def close(self, force: float = 40.0, speed: float = 0.05) -> bool:

@@ -1,6 +1,6 @@
 """Self-imitation with three optimiser settings (paper / cosine decay / decay + pruning) on a ray-cast mug demo.
 
-Usage (repo root): .venv/bin/python scripts/diagnose_self_imitation.py WEIGHTS THREADS
+Usage (repo root): .venv/bin/python scripts/diagnose/diagnose_self_imitation.py WEIGHTS THREADS
 The figures in docs/ came from an early checkpoint: runs/nif/best.pt after epoch 1, one thread.
 """
 import sys

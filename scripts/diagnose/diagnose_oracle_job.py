@@ -2,7 +2,7 @@
 stage, how wide the fingers got when letting go, and what the arm touched when it stopped
 (docs/jobs.md, "Onto a peg" and "Finger openings").
 
-Usage (repo root): .venv/bin/python scripts/diagnose_oracle_job.py TASK POSE SEED... [--peg-clearance M]
+Usage (repo root): .venv/bin/python scripts/diagnose/diagnose_oracle_job.py TASK POSE SEED... [--peg-clearance M]
     [--release-clearance M] [--approach-clearance M] [--calibration FILE]
 e.g. `mug upright 5 --peg-clearance 0.006` (~10 s a job). Each job runs alone in a fresh cell, with
 the true camera pose (as tests/test_jobs.py does) or the calibration file's (as `nift bench-jobs
@@ -67,8 +67,6 @@ for name in ("release_clearance", "approach_clearance"):
         job = replace(job, **{name: getattr(args, name)})
 
 stops: list[str] = []
-halt = sim_arm.SimArm._halt
-sim_arm.SimArm._halt = lambda arm, reason: (stops.append(", ".join(touched_when_stopped(arm))), halt(arm, reason))[1]
 watches: list[Watch] = []
 
 
@@ -80,6 +78,7 @@ def watching(*hook_args) -> Watch:
 for seed in args.seeds:
     config, stops[:] = CellConfig(), []
     with SimCell(config) as cell:
+        cell.arm.on_stop.append(lambda reason, arm=cell.arm: stops.append(", ".join(touched_when_stopped(arm))))
         scene = PlanningScene(config)
         T_cam = np.array(cell.camera.config.T_base_cam) if args.calibration is None else ensure_calibration(cell, args.calibration)
         try:

@@ -1,7 +1,7 @@
 """Where NIFT hangs unseen mugs: the place judge's verdict and how far the handle's hole ends up from
 the peg, for a contact weighting scale (docs/additions.md, "Contact weighting").
 
-Usage (repo root): .venv/bin/python scripts/diagnose_mug_place.py [SCALE_M [N]]   (default 0.01 20; ~5 s per mug)
+Usage (repo root): .venv/bin/python scripts/diagnose/diagnose_mug_place.py [SCALE_M [N]]   (default 0.01 20; ~5 s per mug)
 SCALE_M = 0 is the paper's plain mean over the template points. Targets: the first N test mugs,
 upright at a random yaw and place, seen by the cell's Kinect (`nift bench-imitation`'s targets).
 """

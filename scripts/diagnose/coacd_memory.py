@@ -1,7 +1,7 @@
 """Resident memory of this process over CoACD decompositions of new mugs: in a child process (as
 `app.objects.collision.decompose` runs it) or in this process (as it ran before).
 
-Usage (repo root): .venv/bin/python scripts/coacd_memory.py FIRST_SEED LAST_SEED {child,inproc}
+Usage (repo root): .venv/bin/python scripts/diagnose/coacd_memory.py FIRST_SEED LAST_SEED {child,inproc}
 e.g. `930 938 child` (~20 s a mug). Prints the resident MB before and after each decomposition.
 """
 import argparse

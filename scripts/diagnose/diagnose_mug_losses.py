@@ -6,7 +6,7 @@ For upright test mugs (seeds 0..N-1, as `nift bench-jobs` spawns them), prints
   - for 12 turns of the oracle's grasp, each carried to the rack as the medoid demo carried its mug,
     the place template's loss, and at which turn it is lowest (the demos' turn is 180 degrees).
 
-    .venv/bin/python scripts/diagnose_mug_losses.py [N]     (about 10 s a seed)
+    .venv/bin/python scripts/diagnose/diagnose_mug_losses.py [N]     (about 10 s a seed)
 """
 from __future__ import annotations
 

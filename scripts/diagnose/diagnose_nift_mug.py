@@ -1,7 +1,7 @@
 """Why NIFT's executed mug jobs fail, per upright test mug: NIFT's grasp candidates against the
 oracle's rim grasp, and its place candidates judged by the teleported place judge.
 
-    .venv/bin/python scripts/diagnose_nift_mug.py FIRST LAST [--fields DIR] [--calibration FILE]
+    .venv/bin/python scripts/diagnose/diagnose_nift_mug.py FIRST LAST [--fields DIR] [--calibration FILE]
 
 For each seed it captures the cell's one Kinect view as a job does, imitates with the cell's schedule
 and prints one JSON line: for the oracle's grasp and each of NIFT's first 8 grasp candidates, the TCP's

@@ -1,6 +1,6 @@
 """Template loss at the found pose vs at the scripted teacher's pose on unseen test objects (shipped NIF and NITs).
 
-Usage (repo root): .venv/bin/python scripts/diagnose_template_loss.py [TASK ...]   (default: mug bottle)
+Usage (repo root): .venv/bin/python scripts/diagnose/diagnose_template_loss.py [TASK ...]   (default: mug bottle)
 If the found pose scores lower than the teacher's, the optimiser is not what fails: the objective is.
 """
 import sys

@@ -1,7 +1,7 @@
 """How far grasp alignment turns the scripted teacher's (square) grasps, by where the normals come from:
 the mesh itself (its face normals), four fused cameras, or the cell's one Kinect (docs/additions.md, "Grasp alignment").
 
-Usage (repo root): .venv/bin/python scripts/diagnose_grasp_alignment.py TASK POSE TRIAL... [--seed 0]
+Usage (repo root): .venv/bin/python scripts/diagnose/diagnose_grasp_alignment.py TASK POSE TRIAL... [--seed 0]
 e.g. `bowl upright 0-8` (about 1 s per trial). The trials are `nift bench`'s: the same objects, poses
 and clouds. A teacher grasp closes square to the rim's wall, so every degree of turn is an error of
 the normals; the bench aligns grasps where this stays small (fused) and not where it does not (single).

@@ -1,7 +1,7 @@
 """Where NIFT's hang leaves the handle's hole, along its long axis, before and after peg centring, and
 the place judge's verdict on both (docs/additions.md, "Peg centring").
 
-Usage (repo root): .venv/bin/python scripts/diagnose_peg_centering.py [FIRST LAST]   (default 0 20; ~6 s per mug)
+Usage (repo root): .venv/bin/python scripts/diagnose/diagnose_peg_centering.py [FIRST LAST]   (default 0 20; ~6 s per mug)
 Targets: test mugs FIRST..LAST-1, upright at a random yaw and place, seen by the cell's Kinect
 (`nift bench-imitation`'s targets; the same mugs for any FIRST); contact weighting on.
 """

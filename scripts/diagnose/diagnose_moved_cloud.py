@@ -1,6 +1,6 @@
 """How many optimiser initialisations it takes to find a demo's grasp again on its own cloud moved rigidly.
 
-Usage (repo root): .venv/bin/python scripts/diagnose_moved_cloud.py
+Usage (repo root): .venv/bin/python scripts/diagnose/diagnose_moved_cloud.py
 The setting of tests/test_imitation.py (a train mug, 10 random rigid moves); prints successes
 (within 1 cm / 10 degrees) and seconds for 10 and 20 pruned inits and the paper's schedule.
 """

@@ -1,6 +1,6 @@
 """Why NIFT's 10-demo bowl grasp template fails upright (docs/additions.md, "Fewer demos").
 
-Usage (repo root): .venv/bin/python scripts/diagnose_bowl_grasp.py [offsets|single|cross]
+Usage (repo root): .venv/bin/python scripts/diagnose/diagnose_bowl_grasp.py [offsets|single|cross]
   offsets  predicted vs teacher grasp on 6 test bowls, in the bowl frame (radius r, height z)
   single   a template from each single demo: bowl upright success on 6 bench trials
   cross    each single-demo template imitated on the other 9 demos' clouds: grasp error

@@ -2,7 +2,7 @@
 as the bench judges them), the grasp judge's verdict on each and how much of the cloud lies between
 the fingers (docs/additions.md, "Where NIFT fails").
 
-Usage (repo root): .venv/bin/python scripts/diagnose_grasp_slips.py TASK POSE TRIAL... [--camera fused]
+Usage (repo root): .venv/bin/python scripts/diagnose/diagnose_grasp_slips.py TASK POSE TRIAL... [--camera fused]
 e.g. `bottle arbitrary 0-25` or `mug upright 5 18 19 --camera fused` (~50 s per trial: six judged
 grasps). The trials are `nift bench`'s (seed 0): the same objects, poses, clouds, demos and fields.
 One line per trial, best first: O holds, s slips, . closes on nothing; n = cloud points between the

@@ -1,6 +1,6 @@
 """Room around the peg for test mugs hung at the teacher's hang: the mesh's, and Bullet's at a margin.
 
-    .venv/bin/python scripts/diagnose_hang_gap.py [--margin M] [--scale S] [INSTANCE ...]
+    .venv/bin/python scripts/diagnose/diagnose_hang_gap.py [--margin M] [--scale S] [INSTANCE ...]
 
 Prints, per mug, the gap on its mesh and in the simulated cell (mm); --margin sets the cell's
 `mesh_margin` (Bullet's own default is 0.001).

@@ -2,7 +2,7 @@
 against it (docs/limits.md): from one Kinect the handle is sometimes entirely hidden
 behind the mug, and then no method sees where the peg has to go.
 
-Usage (repo root): .venv/bin/python scripts/diagnose_handle_visibility.py RUN [--method ibs-nif]
+Usage (repo root): .venv/bin/python scripts/diagnose/diagnose_handle_visibility.py RUN [--method ibs-nif]
 e.g. `out/bench-t100` (about 1 minute for 200 trials). RUN is a `nift bench` directory with mug
 trials; the clouds are rebuilt from its seed and camera setting, as the bench drew them.
 """

@@ -7,15 +7,15 @@ A normal whose y points away from the object (the outer finger's -y contact poin
 object to the pad: it follows the finger as it opens. `--keep-contacts` runs the gripper as it was
 before `SimGripper._forget_finger_contacts`, to see that.
 
-Usage (repo root): .venv/bin/python scripts/diagnose_release_drag.py TASK SEED [--method M] [--keep-contacts]
+Usage (repo root): .venv/bin/python scripts/diagnose/diagnose_release_drag.py TASK SEED [--method M] [--keep-contacts]
     [--calibration FILE]       e.g. `bowl 4 --keep-contacts` (~10 s)
 """
 import argparse
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 
-import hardware.sim.gripper as sim_gripper
 from app.jobs.job import JobConfig
 from app.motion.scene import PlanningScene
 from app.sim.calibration import ensure_calibration
@@ -52,13 +52,16 @@ def show(hooks: SimHooks, label: str) -> None:
                   f"normal {np.round(T_tcp[:3, :3] @ np.array(c[7]), 2)}")
 
 
-def watched_drive(drive):
-    """The gripper's drive, printing every PRINT_EVERY steps while the release opens."""
-    def wrapped(self, target: float, force: float, speed: float) -> None:
+def watched_open(gripper):
+    """The gripper's open, printing every PRINT_EVERY steps while the release opens."""
+    opening = gripper.open
+
+    def wrapped(speed: float = 0.1, width: float | None = None) -> None:
         hooks = Watch.releasing
-        if hooks is None or target <= 0:
-            return drive(self, target, force, speed)
-        step = self.robot.world.step
+        if hooks is None:
+            return opening(speed, width)
+        world = gripper.robot.world
+        step = world.step
         count = [0]
 
         def counting(n: int = 1) -> None:
@@ -66,11 +69,11 @@ def watched_drive(drive):
             count[0] += 1
             if count[0] % PRINT_EVERY == 0:
                 show(hooks, f"opening, step {count[0]}")
-        self.robot.world.step = counting
+        world.step = counting
         try:
-            return drive(self, target, force, speed)
+            return opening(speed, width)
         finally:
-            self.robot.world.step = step
+            world.step = step
     return wrapped
 
 
@@ -81,11 +84,11 @@ parser.add_argument("--method", default="teacher", help="the method whose poses 
 parser.add_argument("--keep-contacts", action="store_true", help="the gripper as before: contacts kept on opening")
 parser.add_argument("--calibration", type=Path, default=None, help="camera calibration file (calibrated first if missing)")
 args = parser.parse_args()
-if args.keep_contacts:
-    sim_gripper.SimGripper._forget_finger_contacts = lambda self: None
-sim_gripper.SimGripper._drive = watched_drive(sim_gripper.SimGripper._drive)
 config = CellConfig()
+if args.keep_contacts:
+    config = replace(config, gripper=replace(config.gripper, forget_contacts=False))
 with SimCell(config) as cell:
+    cell.gripper.open = watched_open(cell.gripper)
     scene = PlanningScene(config)
     T_cam = np.array(cell.camera.config.T_base_cam) if args.calibration is None else ensure_calibration(cell, args.calibration)
     try:

@@ -2,7 +2,7 @@
 "The grip force: found, tried three times, not changed"): the fingers close on a static block between the pads, the
 world steps 50 more times, and the finger motors' forces and the pads' contact forces are printed.
 
-Usage (repo root): .venv/bin/python scripts/diagnose_grip_force.py [FORCE ...]   (default 10 20 30 40 60 N; ~5 s)
+Usage (repo root): .venv/bin/python scripts/diagnose/diagnose_grip_force.py [FORCE ...]   (default 10 20 30 40 60 N; ~5 s)
 """
 import sys
 

@@ -1,7 +1,7 @@
 """How far off the scripted teacher's bowl grasp may be and still hold under the teleported judge
 (docs/additions.md, "Grasp centring"; app/predict/grasp_centering.py).
 
-Usage (repo root): .venv/bin/python scripts/diagnose_grasp_tolerance.py   (4 test bowls, ~30 s)
+Usage (repo root): .venv/bin/python scripts/diagnose/diagnose_grasp_tolerance.py   (4 test bowls, ~30 s)
 The teacher's TCP frame: y across the wall towards the bowl's axis, z the approach (down the wall).
 """
 import numpy as np

@@ -1,6 +1,6 @@
 """Sampling planners on the same transit problems, with the same collision checker (docs/decisions.md).
 
-Usage (repo root): .venv/bin/python scripts/compare_planners.py [N] [--timeout S]
+Usage (repo root): .venv/bin/python scripts/diagnose/compare_planners.py [N] [--timeout S]
 N problems (default 20): a top-down TCP pose over the workspace to one above the shelf or in front
 of the rack's peg, with a 6 cm pillar, 10-30 cm tall, on the table between them; only problems whose
 direct joint path collides are kept. Every planner answers `PlanningScene.collisions` (the cell's
