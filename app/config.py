@@ -72,3 +72,40 @@ def load_toml(cls: type[T], path: str | Path, only_known: bool = False) -> T:
         names = {f.name for f in dataclasses.fields(cls)}
         data = {k: v for k, v in data.items() if k in names}
     return from_dict(cls, data, where=f"{path}: ")
+
+
+def defaults_toml(cls: type, header: str) -> str:
+    """A TOML file for dataclass `cls` that sets nothing: `header` (comment lines), then every setting
+    at its default as a commented-out line, nested dataclasses as tables - a user uncomments what they
+    change (`tests/test_config_files.py` keeps the shipped files equal to this)."""
+    lines = [f"# {line}".rstrip() for line in header.strip().splitlines()] + [""]
+    _table(cls(), [], lines)
+    return "\n".join(lines) + "\n"
+
+
+def _table(obj: Any, path: list[str], lines: list[str]) -> None:
+    nested = []
+    if path:
+        lines += ["", f"# [{'.'.join(path)}]"]
+    for f in dataclasses.fields(obj):
+        value = getattr(obj, f.name)
+        if dataclasses.is_dataclass(value):
+            nested.append((f.name, value))
+        elif value is None:
+            lines.append(f"# {f.name} =   (unset)")
+        else:
+            lines.append(f"# {f.name} = {_toml_value(value)}")
+    for name, value in nested:
+        _table(value, [*path, name], lines)
+
+
+def _toml_value(value: Any) -> str:
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, (int, float)) and not isinstance(value, bool):
+        return repr(int(value)) if isinstance(value, int) else repr(float(value))
+    if isinstance(value, (tuple, list)):
+        return "[" + ", ".join(_toml_value(v) for v in value) + "]"
+    if hasattr(value, "item"):  # a numpy scalar
+        return _toml_value(value.item())
+    return '"' + str(value).replace("\\", "\\\\").replace('"', '\\"') + '"'

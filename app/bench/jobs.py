@@ -56,17 +56,17 @@ def summarise(name: str, results: list[JobResult]) -> dict:
     return out
 
 
-def run_jobs_benchmark(jobs: int = 20, method: str = "nift", pose: str = "upright", seed: int = 0,
+def run_jobs_benchmark(jobs: int = 20, job: JobConfig = JobConfig(), pose: str = "upright", seed: int = 0,
                        tasks: tuple[str, ...] = ("mug", "bowl", "bottle"), cell_config: CellConfig = CellConfig(),
                        calibration: Path | None = None, progress: Callable[[JobResult], None] = lambda r: None,
-                       records: Path | None = None, second_look: bool | None = None) -> dict:
+                       records: Path | None = None) -> dict:
     """Run `jobs` jobs per task (seeds seed .. seed + jobs - 1) and summarise them; the camera pose
     comes from the `calibration` file (calibrating first if it is missing), or is the true one;
-    `records`: every job's record, as a JSON list, written there (atomically) at the end; `second_look`:
-    the jobs' second look at the held object (`app.jobs.second_look`)."""
+    `records`: every job's record, as a JSON list, written there (atomically) at the end; `job`: how each
+    job runs (its method, its second look, ...)."""
     from app.sim.calibration import ensure_calibration
 
-    figures: dict = {"method": method, "pose": pose, "jobs_per_task": jobs}
+    figures: dict = {"method": job.method, "pose": pose, "jobs_per_task": jobs}
     every: list[dict] = []
     rss: list[float] = []  # MiB after each job
 
@@ -80,7 +80,7 @@ def run_jobs_benchmark(jobs: int = 20, method: str = "nift", pose: str = "uprigh
         try:
             for name in tasks:
                 specs = [JobSpec(task(name), seed + i, pose) for i in range(jobs)]
-                results = run_series(cell, scene, T_cam, specs, JobConfig.of(method, second_look=second_look), each)
+                results = run_series(cell, scene, T_cam, specs, job, each)
                 figures.update(summarise(name, results))
                 every += [r.record() for r in results]
         finally:

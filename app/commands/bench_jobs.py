@@ -5,7 +5,7 @@ import argparse
 from pathlib import Path
 
 from app.categories import POSES
-from app.console.options import add_config_argument, add_second_look_argument
+from app.console.options import add_config_argument, add_job_config_argument, add_second_look_argument
 from app.console.output import print_figures
 
 NAME = "bench-jobs"
@@ -15,7 +15,8 @@ HELP = "run a series of executed jobs per task and report success, planning, tra
 def add_arguments(p: argparse.ArgumentParser) -> None:
     from app.predict.methods import choices
 
-    p.add_argument("--method", default="nift", choices=choices(), help="method (oracle, or teacher: the simulator's true poses)")
+    p.add_argument("--method", choices=choices(), help="method (default nift; oracle, alias teacher: the simulator's "
+                   "true poses)")
     p.add_argument("--jobs", type=int, default=20, help="jobs per task (default 20)")
     p.add_argument("--tasks", default="mug,bowl,bottle", help="comma list of tasks")
     p.add_argument("--pose", default="upright", choices=POSES, help="how the objects stand (see nift run --help)")
@@ -27,10 +28,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--records", type=Path, default=None, help="also write every job's record (a JSON list) to this file")
     add_second_look_argument(p)
     add_config_argument(p)
+    add_job_config_argument(p)
 
 
 def run(args: argparse.Namespace) -> int:
-    from app.console.options import cell_config
+    from app.console.options import cell_config, job_config
     from app.io_utils import writable_file
     from app.tasks.task import task
 
@@ -38,7 +40,8 @@ def run(args: argparse.Namespace) -> int:
     jobs = 2 if args.quick else args.jobs
     if jobs < 1:
         raise ValueError(f"--jobs must be at least 1, got {jobs}")
-    cell_cfg = cell_config(args)  # a bad --config fails before the progress bar
+    cell_cfg = cell_config(args)  # a bad --config or --job-config fails before the progress bar
+    job = job_config(args)
     if args.records is not None:
         writable_file(args.records, "--records")
 
@@ -47,7 +50,7 @@ def run(args: argparse.Namespace) -> int:
     from app.bench.jobs import run_jobs_benchmark
 
     with tqdm(total=jobs * len(tasks), unit="job", desc="bench-jobs") as bar:
-        figures = run_jobs_benchmark(jobs, args.method, args.pose, args.seed, tasks, cell_cfg, args.calibration,
-                                     lambda r: bar.update(1), args.records, args.second_look)
+        figures = run_jobs_benchmark(jobs, job, args.pose, args.seed, tasks, cell_cfg, args.calibration,
+                                     lambda r: bar.update(1), args.records)
     print_figures(figures, args.json)
     return 0

@@ -6,7 +6,8 @@ import json
 from pathlib import Path
 
 from app.categories import POSES
-from app.console.options import add_config_argument, add_second_look_argument, cell_config
+from app.console.options import (add_config_argument, add_job_config_argument, add_second_look_argument, cell_config,
+                                 job_config)
 
 NAME = "run"
 HELP = "run pick-and-place jobs in the sim cell: capture, imitate, plan, grasp, carry, place, verify"
@@ -21,8 +22,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                         "the table and settled, as it fell)")
     p.add_argument("--seed", type=int, default=0, help="picks the unseen object, its scale and pose (job i: seed + i)")
     p.add_argument("--jobs", type=int, default=1, help="run a series of this many jobs")
-    p.add_argument("--method", default="nift", choices=choices(),
-                   help="how grasp and place poses are found (oracle, alias teacher: the simulator's ground truth)")
+    p.add_argument("--method", choices=choices(),
+                   help="how grasp and place poses are found (default nift; oracle, alias teacher: the simulator's "
+                        "ground truth)")
     p.add_argument("--object", metavar="NAME", help="an imported object (nift objects import) instead of unseen "
                    "procedural ones; each job puts it in a new pose")
     p.add_argument("--demos", type=Path, help="task directory (default demos/<task>)")
@@ -37,6 +39,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--json", action="store_true", help="print the result records as JSON")
     add_second_look_argument(p)
     add_config_argument(p)
+    add_job_config_argument(p)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -49,15 +52,13 @@ def run(args: argparse.Namespace) -> int:
     if args.devices == "sim":
         cell_config(args)  # a bad --config fails here, in a second, not after the job path's imports
 
-    from app.jobs.job import JobConfig
-    from app.predict.config import PredictConfig
     from app.tasks.task import task
 
+    config = job_config(args)  # a bad --job-config fails here too
     t = task(args.task)
     source = imported(args.object, t, args.method) if args.object else None
     if source is not None and args.devices == "net":
         raise ValueError("--object needs the simulated cell in this process (--devices sim)")
-    config = JobConfig(predict=PredictConfig(method=args.method, demos=args.demos), second_look=args.second_look)
     results = _run_net(args, t, config) if args.devices == "net" else _run_sim(args, t, config, source)
     return _report(results, args, t)
 

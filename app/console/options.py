@@ -23,6 +23,29 @@ def cell_config(args: argparse.Namespace, gui: bool = False):
     return config
 
 
+def add_job_config_argument(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--job-config", type=Path, help="job settings TOML (see configs/job.toml); --method, --demos and "
+                   "--second-look override it")
+
+
+def job_config(args: argparse.Namespace):
+    """JobConfig from --job-config (or the defaults), with --method, --demos and --second-look where given;
+    args.method becomes the method the job runs."""
+    from app.config import load_toml
+    from app.jobs.settings import JobConfig
+
+    job = load_toml(JobConfig, args.job_config) if args.job_config else JobConfig()
+    predict = job.predict
+    if args.method is not None:
+        predict = replace(predict, method=args.method)
+    if getattr(args, "demos", None) is not None:
+        predict = replace(predict, demos=args.demos)
+    second_look = job.second_look if args.second_look is None else args.second_look
+    job = replace(job, predict=predict, second_look=second_look)
+    args.method = job.method
+    return job
+
+
 def add_imitation_arguments(p: argparse.ArgumentParser) -> None:
     """--inits, --iterations, --prune-every, --patience, --explore-points, --{grasp,place}-contact-scale,
     --place-demo-match."""
