@@ -134,7 +134,7 @@ def test_imitation_flags_out_of_range_end_in_one_line_before_any_work(tmp_path):
     np.save(cloud, task_demos(DEMOS_DIR / "mug")[0].cloud)
     out = nift("imitate", "--task", "mug", "--cloud", str(cloud), "--inits", "1000000")
     assert out.returncode == 2 and out.stderr.strip().count("\n") == 0
-    assert "inits must be an integer in [1, 1000], got 1000000" in out.stderr
+    assert "inits must be in [1, 1000], got 1000000" in out.stderr
 
 
 @pytest.mark.parametrize("change, message", [

@@ -129,9 +129,9 @@ def test_a_feasibility_predicate_rules_poses_out_and_only_a_predicate_nothing_pa
 
 def test_a_negative_or_nan_contact_scale_is_refused_in_one_line():
     for bad in (-0.01, float("nan")):
-        with pytest.raises(ValueError, match="place_contact_scale must be >= 0"):
+        with pytest.raises(ValueError, match=r"place_contact_scale must be in \[0, 10\] m"):
             ImitationConfig(place_contact_scale=bad)
-    with pytest.raises(ValueError, match="grasp_contact_scale must be >= 0"):
+    with pytest.raises(ValueError, match=r"grasp_contact_scale must be in \[0, 10\] m"):
         ImitationConfig(grasp_contact_scale=-1.0)
     assert ImitationConfig(place_contact_scale=0.0).contact_scale("rack") == 0.0
 

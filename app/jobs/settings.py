@@ -10,7 +10,7 @@ from app.perception import PerceptionConfig
 from app.predict.config import PredictConfig
 from app.predict.methods import method as method_record
 from app.tasks.task import Task
-from hardware.settings import check_ranges
+from hardware.settings import check_integers, check_ranges
 
 
 @dataclass(frozen=True)
@@ -47,10 +47,8 @@ class JobConfig:
     motion: MotionConfig = MotionConfig()
 
     def __post_init__(self) -> None:
+        check_integers(self, ("attempts", "most_plans", "threads"))
         check_ranges(self, RANGES)
-        for name in ("attempts", "most_plans", "threads"):
-            if not isinstance(getattr(self, name), int):
-                raise ValueError(f"{name} must be an integer >= 1, got {getattr(self, name)!r}")
 
     @property
     def method(self) -> str:

@@ -5,15 +5,21 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from app.nift.candidates import CandidateConfig
+from hardware.settings import check_choices, check_integers, check_ranges
 
 DEMO_MATCHES = ("mean", "nearest")
 # (name, lowest, highest) of the integer settings: beyond MAX_INITS the (inits, points, features)
 # tensors alone outgrow a cell PC's memory (1,000,000 inits asked for 65 GB)
 MAX_INITS = 1000
-INTEGER_RANGES = (("inits", 1, MAX_INITS), ("iterations", 1, 100_000), ("patience", 1, 100_000),
-                  ("prune_every", 0, 100_000), ("keep", 1, MAX_INITS), ("explore_points", 0, 100_000),
-                  ("refine_points", 0, 100_000), ("grasp_start_turns", 0, 360), ("seed", 0, 2**32 - 1))
-REAL_RANGES = (("lr", 0.0, 10.0), ("lr_final_ratio", 0.0, 1.0))  # (low, high]
+INTEGER_RANGES = (("inits", 1, MAX_INITS, "", True), ("iterations", 1, 100_000, "", True),
+                  ("patience", 1, 100_000, "", True), ("prune_every", 0, 100_000, "", True),
+                  ("keep", 1, MAX_INITS, "", True), ("explore_points", 0, 100_000, "", True),
+                  ("refine_points", 0, 100_000, "", True), ("grasp_start_turns", 0, 360, "", True),
+                  ("seed", 0, 2**32 - 1, "", True))
+RANGES = (*INTEGER_RANGES, ("lr", 0.0, 10.0, "", False), ("lr_final_ratio", 0.0, 1.0, "", False),
+          ("min_weight", 0.0, 0.999999, "(a share of the largest point weight)", True),
+          ("grasp_contact_scale", 0.0, 10.0, "m (0: the paper's plain mean)", True),
+          ("place_contact_scale", 0.0, 10.0, "m (0: the paper's plain mean)", True))
 
 
 @dataclass(frozen=True)
@@ -59,22 +65,9 @@ class ImitationConfig:
     seed: int = 0
 
     def __post_init__(self) -> None:
-        for name, low, high in INTEGER_RANGES:
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= high:
-                raise ValueError(f"{name} must be an integer in [{low}, {high}], got {value!r}")
-        for name, low, high in REAL_RANGES:
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, (int, float)) or not low < value <= high:
-                raise ValueError(f"{name} must be a number in ({low:g}, {high:g}], got {value!r}")
-        for name in ("grasp_demo_match", "place_demo_match"):
-            if getattr(self, name) not in DEMO_MATCHES:
-                raise ValueError(f"unknown {name} {getattr(self, name)!r}; choose one of {', '.join(DEMO_MATCHES)}")
-        if not 0.0 <= self.min_weight < 1.0:
-            raise ValueError(f"min_weight must be in [0, 1) (a share of the largest point weight), got {self.min_weight}")
-        for name in ("grasp_contact_scale", "place_contact_scale"):
-            if not getattr(self, name) >= 0.0:  # also NaN
-                raise ValueError(f"{name} must be >= 0 metres (0: the paper's plain mean), got {getattr(self, name)}")
+        check_integers(self, tuple(name for name, *_ in INTEGER_RANGES))
+        check_ranges(self, RANGES)
+        check_choices(self, {"grasp_demo_match": DEMO_MATCHES, "place_demo_match": DEMO_MATCHES})
 
     def contact_scale(self, anchor: str) -> float:
         """The contact weighting scale for a template of this anchor."""
