@@ -20,18 +20,18 @@ class JobConfig:
 
     predict: PredictConfig = PredictConfig()
     grasp_force: float = 40.0  # N
-    approach_clearance: float = 0.04  # m the fingers open beyond the held width on the approach: fully open
-    # (85 mm), the inner finger of a rim grasp landed on the far wall of a small mug (4 of 50 oracle jobs)
-    release_clearance: float = 0.04  # m the fingers open beyond the held width to let go: fully open,
-    # the far finger inside a bowl swept its wall on the retreat; at 2 cm a bowl that had turned 4-5
-    # degrees in the grasp still leant on a finger and was dragged off the shelf
+    approach_clearance: float = 0.04  # m the fingers open beyond the held width on the approach: no wider, so the
+    # inner finger of a rim grasp stays clear of a small mug's far wall
+    release_clearance: float = 0.04  # m the fingers open beyond the held width to let go: enough that an object
+    # turned a few degrees in the grasp does not lean on a finger as the tool retreats; no wider, so the far
+    # finger inside a bowl does not sweep its wall
     table_z: float = 0.0  # m, the table top in the base frame (the cell's layout)
     second_look: bool | None = None  # show the held object to the camera and choose the place again from what
-    # it shows (app.jobs.second_look); None: on for hangs, where the held views show the handle hole
-    # (mug 5/20 -> 12/20), off otherwise (bowls 10/10 -> 7/10 when it imitated the place again; docs/jobs.md)
+    # it shows (app.jobs.second_look); None: on for hangs, where the held views show the handle hole, off for
+    # the shelf, where imitating the place again only adds risk (docs/decisions.md)
     look: SecondLookConfig = SecondLookConfig()
-    approach_contact_force: float = 30.0  # N of change of the wrist's force, held 20 ms, that stops the approach line
-    # (nothing held: every approach that reached its grasp changed it by 0 N; a finger on a mug's rim, 200-380 N)
+    approach_contact_force: float = 30.0  # N of change of the wrist's force, held 20 ms, that stops the approach line:
+    # far above what a free approach sees, far below a finger pressing on a rim
     place_contact_force: float = 30.0  # N of change, held 20 ms, that stops a predicted hang's place line and starts
     # the search beside it (app.jobs.guarded)
     leave_contact_force: float = 30.0  # N of change that stops a predicted hang's way out: the fingers met the mug

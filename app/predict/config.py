@@ -11,7 +11,7 @@ from app.predict.methods import method as method_record
 
 # The cell's imitation schedule: prune every 10 steps down to 3 poses, one per basin, explore on 128
 # points and refine on 256, leave out points of negligible weight, stop after 25 steps without gain,
-# decay over 200 steps, and start grasps from the demos' too (docs/jobs.md, "Imitation time").
+# decay over 200 steps, and start grasps from the demos' too (docs/journal/jobs-2026-11-to-12-05.md).
 # `ImitationConfig()` alone is the teleported benchmark's schedule (docs/benchmark.md).
 CELL_IMITATION = ImitationConfig(prune_every=10, explore_points=128, refine_points=256, patience=25, iterations=200,
                                  keep=3, min_weight=1e-3, diverse=True, candidates=CandidateConfig(margin=0.3, most=8),

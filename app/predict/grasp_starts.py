@@ -7,7 +7,7 @@ in the base frame, whose z is up. They join the random initialisations of the gr
 (Eq. 5); the loss still decides. Why: from one Kinect view, 20 Haar-random starts never reached a
 mug's rim from above (0 of 20 mugs' best grasps within 20 degrees of straight down, although the
 imitation started at the oracle's rim grasp stays there at a lower loss); 9 of 20
-with these starts, 4 turns (docs/jobs.md, "Grasp starts").
+with these starts, 4 turns (docs/journal/jobs-2026-11-to-12-05.md, "Grasp starts").
 """
 from __future__ import annotations
 
