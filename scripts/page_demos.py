@@ -14,9 +14,9 @@ from pathlib import Path
 
 import numpy as np
 
-from app.sim.cell import CellConfig, SimCell
+from app.simcell.cell import CellConfig, SimCell
 from app.tasks.demo import DEMO_GLOB, load_demo
-from app.tasks.library import DEMOS_DIR
+from app.tasks.demo_library import DEMOS_DIR
 from app.tasks.task import task
 from app.teach.operator import Operator, chromium
 from app.teach.page import TeachPage

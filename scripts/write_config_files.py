@@ -6,9 +6,9 @@ from pathlib import Path
 from app.config import defaults_toml
 from app.io_utils import atomic_path
 from app.jobs.settings import JobConfig
-from app.sim.cell import CellConfig
+from app.simcell.cell import CellConfig
 
-CELL_HEADER = """The simulated cell: app.sim.cell.CellConfig (the layout, app.layout.CellLayout; the camera), with
+CELL_HEADER = """The simulated cell: app.simcell.cell.CellConfig (the layout, app.layout.CellLayout; the camera), with
 [world] hardware.sim.world.SimWorldConfig, [arm] hardware.sim.arm.SimArmConfig and [gripper]
 hardware.sim.gripper.SimGripperConfig. Pass it with --config FILE (nift run, bench-jobs, serve, ...).
 Every setting is shown at its default, commented out: uncomment what you change. Lengths in metres,

@@ -20,8 +20,8 @@ def teacher_grasp_verdicts():
     ((T_world_tcp, cloud) -> T_world_tcp) of the scripted teacher's grasp on the first upright test
     object, moved by T_tcp_offset (TCP frame); the cloud is 20,000 points of the object's surface."""
     from app.objects import split
-    from app.sim.judges import judge_grasp
-    from app.sim.spawn import spawn
+    from app.simcell.judges import judge_grasp
+    from app.simcell.spawn import spawn
     from app.tasks.task import teacher_grasp
     from hardware.se3 import make_pose, transform_points
     from hardware.sim.world import SimWorld, SimWorldConfig

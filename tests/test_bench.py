@@ -131,7 +131,7 @@ def test_fused_runs_imitate_demos_seen_by_the_fused_cameras(tmp_path):
     from app.nift.field import FUSED_FIELDS
     from app.objects import generate
     from app.tasks.demo import load_demo
-    from app.tasks.library import DEMOS_DIR
+    from app.tasks.demo_library import DEMOS_DIR
     from hardware.se3 import transform_points
 
     with pytest.raises(ValueError, match="one Kinect"):
@@ -204,7 +204,7 @@ def test_a_results_line_that_is_not_a_row_is_named(tmp_path):
 
 def test_memory_growth_across_refreshes_sees_what_stays_and_not_the_sawtooth():
     from app.bench.memory import growth_across_refreshes, growth_mb_per_job
-    from app.sim.jobs import fresh_client_before
+    from app.simcell.sim_job import fresh_client_before
 
     every, kept, freed = 10, 0.5, 2.0  # MiB a job no refresh frees / a refresh frees
     rss = [700 + kept * i + freed * (i % every) for i in range(60)]  # a sawtooth on a rising floor

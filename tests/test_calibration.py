@@ -60,8 +60,8 @@ def test_solve_with_pixel_noise_stays_within_a_millimetre(rng):
 
 
 def test_sim_cell_calibration_recovers_the_camera():
-    from app.sim.calibration import calibrate_sim_cell
-    from app.sim.cell import SimCell
+    from app.simcell.calibration import calibrate_sim_cell
+    from app.simcell.cell import SimCell
 
     with SimCell() as cell:
         c = calibrate_sim_cell(cell, views=20, seed=0)

@@ -9,10 +9,10 @@ from app.nift.imitate import Imitation, imitate
 from app.nift.raycast import scene_of
 from app.nift.template import build_template
 from app.objects import generate
-from app.predict.candidates import ranked_pairs
+from app.predict.pairs import ranked_pairs
 from app.predict.feasibility import grips_something
 from app.tasks.anchors import anchor_mesh
-from app.tasks.library import DEMOS_DIR, task_demos, task_templates
+from app.tasks.demo_library import DEMOS_DIR, task_demos, task_templates
 from app.tasks.task import task
 from app.tasks.teacher import grasp_pose
 from app.training.views import observe

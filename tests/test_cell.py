@@ -8,10 +8,10 @@ from app.failures import BadFrame, ObjectNotSeen
 from app.jobs.settings import JobConfig
 from app.objects import generate, rack, semantics, shelf
 from app.perception import DEPTH_MAX, back_project, object_cloud, object_points
-from app.sim.cell import SimCell
-from app.sim.hang_gap import bullet_gap, mesh_gap
-from app.sim.judges import judge_grasp, judge_place
-from app.sim.spawn import spawn
+from app.simcell.cell import SimCell
+from app.simcell.hang_gap import bullet_gap, mesh_gap
+from app.simcell.judges import judge_grasp, judge_place
+from app.simcell.spawn import spawn
 from app.tasks.teacher import grasp_pose, hang_pose, shelf_pose
 
 BOX = (0.10, 0.08, 0.06)
@@ -160,7 +160,7 @@ def test_mug_dropped_beside_the_rack_falls_to_the_floor(cell):
 @pytest.mark.parametrize("category", ["mug", "bowl", "bottle"])
 def test_a_resting_object_settles_on_the_table_as_it_fell(cell, category):
     from app.objects import generate
-    from app.sim.spawn import sample_pose
+    from app.simcell.spawn import sample_pose
     from hardware.bullet import p
     from hardware.se3 import rotation_angle
 

@@ -128,7 +128,7 @@ def test_run_refuses_bad_options_in_one_line(tmp_path):
 
 
 def test_imitation_flags_out_of_range_end_in_one_line_before_any_work(tmp_path):
-    from app.tasks.library import DEMOS_DIR, task_demos
+    from app.tasks.demo_library import DEMOS_DIR, task_demos
 
     cloud = tmp_path / "cloud.npy"
     np.save(cloud, task_demos(DEMOS_DIR / "mug")[0].cloud)
@@ -146,7 +146,7 @@ def test_imitation_flags_out_of_range_end_in_one_line_before_any_work(tmp_path):
 ])
 def test_imitate_refuses_a_cloud_no_object_in_the_cell_could_be_in_one_line(tmp_path, change, message):
     """A demo's mug cloud in millimetres, 20 m away, shrunk to 5 mm, ten times too big or of 5 points."""
-    from app.tasks.library import DEMOS_DIR, task_demos
+    from app.tasks.demo_library import DEMOS_DIR, task_demos
 
     cloud = tmp_path / "cloud.npy"
     np.save(cloud, change(task_demos(DEMOS_DIR / "mug")[0].cloud))

@@ -3,7 +3,7 @@ from pathlib import Path
 import pytest
 
 from app.config import load_toml
-from app.sim.cell import CellConfig
+from app.simcell.cell import CellConfig
 
 SHIPPED = Path(__file__).resolve().parents[1] / "configs" / "cell.toml"
 

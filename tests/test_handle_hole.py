@@ -5,11 +5,11 @@ import pytest
 
 from app.nift.raycast import cast, make_scene
 from app.objects import generate, semantics, split
-from app.predict.candidates import Candidate
+from app.predict.pairs import Candidate
 from app.predict.feasibility import demo_carries
 from app.predict.handle_hole import find_hole
 from app.predict.hole_places import FLIPS, UP, demo_hang, demo_hole, hole_pairs, hole_places, with_hole_pairs
-from app.tasks.library import DEMOS_DIR, task_demos
+from app.tasks.demo_library import DEMOS_DIR, task_demos
 from hardware.se3 import invert, make_pose, transform_points
 
 CAMERA = np.array([-0.75, 0.0, 0.55])  # m, looking down at about 36 degrees onto an object at the origin

@@ -208,8 +208,8 @@ def test_the_whole_job_over_the_network_matches_the_in_process_cell(tmp_path):
     from app.jobs.remote import NetCell, NetCellConfig, run_remote_series
     from app.layout import CellLayout
     from app.motion.scene import PlanningScene
-    from app.sim.cell import CellConfig, SimCell
-    from app.sim.jobs import JobSpec, run_sim_job
+    from app.simcell.cell import CellConfig, SimCell
+    from app.simcell.sim_job import JobSpec, run_sim_job
     from app.tasks.task import task
     with SimCell(CellConfig()) as cell:  # the camera's true pose (calibration is tested on its own)
         T_base_cam = np.array(cell.camera.config.T_base_cam)

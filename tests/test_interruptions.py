@@ -57,11 +57,11 @@ def test_make_data_killed_at_random_moments(tmp_path):
 
 
 def test_teach_killed_at_random_moments_loses_no_demo(tmp_path):
-    from app.tasks.library import task_demos, task_templates
+    from app.tasks.demo_library import task_demos, task_templates
     from app.tasks.staging import leftovers, recover
     from app.tasks.task import task
 
-    from app.sim.cell import CellConfig, SimCell
+    from app.simcell.cell import CellConfig, SimCell
     from calibration.store import save_calibration
 
     with SimCell(CellConfig()) as cell:  # the camera's true pose: calibration is tested on its own

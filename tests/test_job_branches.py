@@ -17,7 +17,7 @@ from app.jobs.job import JobConfig, JobHooks, JobResult, run_job
 from app.layout import CellLayout, fixture_meshes
 from app.motion.scene import PlanningScene
 from app.objects.fixtures import SHELF_TOP
-from app.predict.candidates import Candidate
+from app.predict.pairs import Candidate
 from app.predict.predict import Prediction
 from app.tasks.task import task
 from hardware.fake import FakeArm, FakeCamera, FakeCameraConfig, FakeGripper, FakeObject, FakeWorld, Interruption

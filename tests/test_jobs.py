@@ -7,8 +7,8 @@ import pytest
 
 from app.jobs.job import JobConfig
 from app.motion.scene import PlanningScene
-from app.sim.cell import CellConfig, SimCell
-from app.sim.jobs import JobSpec, SimHooks, run_series, run_sim_job
+from app.simcell.cell import CellConfig, SimCell
+from app.simcell.sim_job import JobSpec, SimHooks, run_series, run_sim_job
 from app.tasks.task import task
 from hardware.se3 import make_pose
 
@@ -139,7 +139,7 @@ def test_a_pose_where_every_grasp_is_in_the_table_says_no_grasp_like_the_demos_e
     from app.failures import NoCandidate, NoDemoLikeGrasp
     from app.jobs.choice import NO_DEMO_LIKE_GRASP, choose
     from app.motion.ik import Blocked
-    from app.predict.candidates import Candidate
+    from app.predict.pairs import Candidate
 
     planner = SimpleNamespace(scene=SimpleNamespace(geometry=SimpleNamespace(stroke=0.085),
                                                     fingers=lambda width: nullcontext()))
@@ -162,7 +162,7 @@ def test_a_job_that_looks_again_picks_a_reachable_grasp_whose_first_look_place_i
     from app.failures import NoCandidate
     from app.jobs.choice import PICK_ONLY, choose
     from app.motion.ik import Blocked
-    from app.predict.candidates import Candidate
+    from app.predict.pairs import Candidate
 
     calls = []
 

@@ -2,7 +2,7 @@
 
 Floors, from the bottom (docs/design.md): hardware.se3 < hardware < hardware.sim < calibration <
 app's plumbing < app.nift < app.objects < tasks, layout, perception < predict, motion < jobs, training
-< app.sim < app.bench, app.console < app.commands < app.cli. Every import is counted, lazy ones inside functions too.
+< app.simcell < app.bench, app.console < app.commands < app.cli. Every import is counted, lazy ones inside functions too.
 """
 from __future__ import annotations
 
@@ -29,7 +29,7 @@ FLOORS = {  # module prefix -> floor; the longest matching prefix decides
     "app.tasks": 7, "app.layout": 7, "app.perception": 7,
     "app.predict": 8, "app.motion": 8,
     "app.jobs": 9, "app.training": 9,
-    "app.sim": 10,
+    "app.simcell": 10,
     "app.bench": 11, "app.console": 11, "app.teach": 11,
     "app.commands": 12,
     "app.cli": 13,
@@ -127,7 +127,7 @@ def test_calibration_imports_only_hardware_interfaces_and_se3():
 def test_method_library_imports_no_hardware_but_se3_and_the_settings_checks():
     pure = {"hardware.se3", "hardware.settings"}  # poses and range checks: plain Python, no device
     bad = [f"{a} imports {b}" for a, targets in graph().items() if a.startswith("app.nift")
-           for b in targets if b.startswith("hardware") and b not in pure or b.startswith("app.sim")]
+           for b in targets if b.startswith("hardware") and b not in pure or b.startswith("app.simcell")]
     assert not bad, bad
 
 
@@ -135,7 +135,7 @@ def test_method_library_imports_no_hardware_but_se3_and_the_settings_checks():
 def test_job_path_never_reaches_the_simulator(start):
     edges = graph()
     starts = [m for m in edges if m == start or m.startswith(start + ".")]
-    reached = {(s, m) for s in starts for m in closure(s, edges) if m.startswith(("hardware.sim", "app.sim"))}
+    reached = {(s, m) for s in starts for m in closure(s, edges) if m.startswith(("hardware.sim", "app.simcell"))}
     assert not reached, sorted(reached)
 
 
@@ -154,8 +154,8 @@ def test_importing_the_method_loads_no_simulator():
 
 def test_rules_catch_forbidden_imports():
     """The checker itself: planted upward imports, a planted loop and a sim import on the job path are found."""
-    edges = graph({"hardware.planted": "from app.sim.cell import SimCell\n"})
-    assert "hardware.planted (floor 1) imports app.sim.cell (floor 10)" in upward_imports(edges)
+    edges = graph({"hardware.planted": "from app.simcell.cell import SimCell\n"})
+    assert "hardware.planted (floor 1) imports app.simcell.cell (floor 10)" in upward_imports(edges)
     loop = graph({"app.nift.planted": "import app.nift.planted_too\n", "app.nift.planted_too": "import app.nift.planted\n"})
     assert "app.nift.planted" in closure("app.nift.planted", loop)
     lazy = graph({"app.motion.planted": "def f():\n    from hardware.sim.world import SimWorld\n"})

@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 
 from app.cloud_io import load_cloud
 from app.config import load_toml
-from app.sim.cell import CellConfig
+from app.simcell.cell import CellConfig
 from app.tasks.demo import load_demo
 from app.nift.template import load_template
 from calibration.store import load_calibration

@@ -7,7 +7,7 @@ from app.motion.cartesian import MAX_JOINT_JUMP, line_path
 from app.motion.ik import IKConfig, reach_failure, solve
 from app.motion.scene import PlanningScene
 from app.motion.trajectory import path_timing, remainder, through_waypoints
-from app.sim.cell import CellConfig
+from app.simcell.cell import CellConfig
 from hardware.gripper_geometry import GripperGeometry
 from hardware.interfaces import JointLimits
 from hardware.kinematics import UR5Kinematics

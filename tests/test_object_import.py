@@ -108,7 +108,7 @@ def test_import_round_trips_through_the_library_and_a_failure_writes_nothing(imp
 
 
 def test_an_imported_mug_stands_on_the_table_and_the_teacher_refuses_it(imported):
-    from app.sim.spawn import spawn
+    from app.simcell.spawn import spawn
     from app.tasks.task import teacher_grasp
     from hardware.sim.world import SimWorld, SimWorldConfig
 

@@ -2,7 +2,7 @@
 import numpy as np
 
 from app.objects import generate
-from app.sim.oracle import grasp_turns, oracle_prediction
+from app.simcell.oracle import grasp_turns, oracle_prediction
 from app.tasks.task import task
 from hardware.se3 import invert, make_pose, random_rotations
 

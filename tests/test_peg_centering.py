@@ -74,7 +74,7 @@ def test_a_mug_hung_off_along_its_hole_is_put_back_on_the_peg(index):
 
 def test_the_demos_own_hangs_are_left_within_5_mm():
     """At the place each mug demo really had, its own (single-view) cloud moves the peg by < 5 mm."""
-    from app.tasks.library import DEMOS_DIR, task_demos
+    from app.tasks.demo_library import DEMOS_DIR, task_demos
     from app.tasks.task import task
 
     shifts = [peg_shift(transform_points(invert(d.place_anchor()), d.cloud), RACK)

@@ -92,8 +92,8 @@ def test_the_second_look_fuses_a_held_mug_onto_its_mesh_without_the_gripper(monk
     import app.jobs.held_place as job_module
     from app.jobs.job import JobConfig
     from app.motion.scene import PlanningScene
-    from app.sim.cell import CellConfig, SimCell
-    from app.sim.jobs import JobSpec, SimHooks, oracle_predictor, run_sim_job
+    from app.simcell.cell import CellConfig, SimCell
+    from app.simcell.sim_job import JobSpec, SimHooks, oracle_predictor, run_sim_job
     from app.tasks.task import task
 
     seen = {}

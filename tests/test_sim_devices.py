@@ -190,8 +190,8 @@ def test_tcp_pose_matches_ur_convention(rig):
 def test_stepping_is_deterministic():
     import numpy as np
 
-    from app.sim.cell import SimCell
-    from app.sim.spawn import spawn
+    from app.simcell.cell import SimCell
+    from app.simcell.spawn import spawn
 
     def run_once():
         with SimCell() as cell:

@@ -54,7 +54,7 @@ def test_teach_refuses_to_replace_demos_unasked_and_says_how(tmp_path, capsys):
 def test_a_bowl_demo_in_the_mug_folder_is_refused_before_any_template_is_built(tmp_path):
     import shutil
 
-    from app.tasks.library import DEMOS_DIR
+    from app.tasks.demo_library import DEMOS_DIR
     out = tmp_path / "mug"
     out.mkdir()
     for name in ("demo-00.npz", "demo-01.npz"):
@@ -62,7 +62,7 @@ def test_a_bowl_demo_in_the_mug_folder_is_refused_before_any_template_is_built(t
     shutil.copy(DEMOS_DIR / "bowl" / "demo-00.npz", out / "demo-02.npz")
     assert main(["teach", "--task", "mug", "--rebuild", "--out", str(out)]) == 2
     assert sorted(p.name for p in out.iterdir()) == ["demo-00.npz", "demo-01.npz", "demo-02.npz"]  # nothing built
-    from app.tasks.library import task_templates
+    from app.tasks.demo_library import task_templates
     from app.tasks.task import task
     with pytest.raises(ValueError, match="is of task 'bowl', not 'mug'"):
         task_templates(task("mug"), out, rebuild=True)
@@ -73,7 +73,7 @@ def test_a_session_killed_between_the_two_renames_loses_nothing(tmp_path):
     its place: loading says where the demos are, and the next session puts them back."""
     import os
 
-    from app.tasks.library import task_demos
+    from app.tasks.demo_library import task_demos
     from app.tasks.staging import leftovers, recover
 
     out = tmp_path / "mug"

@@ -8,9 +8,9 @@ from app.cli import main
 from app.cloud_io import load_cloud
 from app.nift.template import load_template
 from app.objects.fixtures import SHELF_SIZE, SHELF_TOP
-from app.sim.cell import CellConfig
+from app.simcell.cell import CellConfig
 from app.tasks.demo import load_demo
-from app.tasks.library import DEMOS_DIR, task_demos
+from app.tasks.demo_library import DEMOS_DIR, task_demos
 
 
 @pytest.mark.slow

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from app.sim.cell import CellConfig, SimCell
+from app.simcell.cell import CellConfig, SimCell
 from app.tasks.demo import load_demo
 from app.tasks.task import task
 

@@ -81,7 +81,7 @@ def test_templates_of_other_nif_weights_sit_beside_the_shipped_ones(tmp_path):
     from app.nift.imitate import ImitationConfig
     from app.predict.config import PredictConfig
     from app.predict.predict import predict
-    from app.tasks.library import DEMOS_DIR, task_demos, task_templates, template_path
+    from app.tasks.demo_library import DEMOS_DIR, task_demos, task_templates, template_path
     from app.tasks.task import task
 
     small = FieldConfig(scf_order=3, latent=8, encoder_width=8, encoder_blocks=1, decoder_width=16, decoder_blocks=1)
@@ -131,7 +131,7 @@ def test_templates_the_project_does_not_ship_are_built_in_the_cache_not_in_demos
     demos>/, are read from there the next time, and nothing is written into demos/."""
     import time
 
-    from app.tasks.library import DEMOS_DIR, built_elsewhere, task_templates
+    from app.tasks.demo_library import DEMOS_DIR, built_elsewhere, task_templates
     from app.tasks.task import task
 
     monkeypatch.setenv("NIFT_CACHE", str(tmp_path))

@@ -1,7 +1,7 @@
 """Grasps turned about a body of revolution's axis keep the task: same place pose, same rim."""
 import numpy as np
 
-from app.predict.candidates import Candidate
+from app.predict.pairs import Candidate
 from app.predict.turned_grasps import slice_centre, turned_pairs
 from hardware.se3 import make_pose
 

@@ -19,9 +19,9 @@ import numpy as np
 from app.bench.protocol import BenchConfig, trial_cloud
 from app.objects.catalog import generate
 from app.objects.library import load_object
-from app.sim.cell import CellConfig
+from app.simcell.cell import CellConfig
 from app.tasks.demo import DEMO_GLOB, Demo, load_demo, save_demo
-from app.tasks.library import DEMOS_DIR
+from app.tasks.demo_library import DEMOS_DIR
 from app.tasks.task import task
 
 

@@ -23,8 +23,8 @@ from app.objects import split
 from app.perception import resample
 from app.predict.config import PredictConfig
 from app.predict.predict import predict
-from app.sim.cell import WORKSPACE, CellConfig
-from app.sim.spawn import SCALE_RANGE
+from app.simcell.cell import WORKSPACE, CellConfig
+from app.simcell.spawn import SCALE_RANGE
 from app.tasks.task import task, teacher_grasp, teacher_place
 from app.training.views import kinect_cloud
 from hardware.se3 import invert, make_pose, pose_error, rotvec_to_matrix

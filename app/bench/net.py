@@ -50,7 +50,7 @@ def _paired_jobs(net: NetCell, local, t, method: str, seeds: list[int], T_base_c
     both, the order alternating from seed to seed (so neither always runs first):
     ([(wall s, success, stage seconds)] net, the same in-process)."""
     from app.motion.scene import PlanningScene
-    from app.sim.jobs import JobSpec, run_sim_job
+    from app.simcell.sim_job import JobSpec, run_sim_job
 
     remote, here = [], []
     scene = PlanningScene(local.config)
@@ -73,8 +73,8 @@ def run_net_benchmark(reads: int, frames: int, jobs: int, task_name: str = "bowl
                       seed: int = 0, calibration: Path = Path("calibration.json")) -> dict:
     """The figures (see the module docstring); the camera pose from the `calibration` file, the
     in-process cell calibrated first (and the file written) if it is missing."""
-    from app.sim.calibration import ensure_calibration
-    from app.sim.cell import CellConfig, SimCell
+    from app.simcell.calibration import ensure_calibration
+    from app.simcell.cell import CellConfig, SimCell
 
     t = task(task_name)
     figures: dict = {}

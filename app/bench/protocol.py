@@ -22,7 +22,7 @@ from app.nift.raycast import scene_of
 from app.predict.config import PredictConfig
 from app.predict.methods import method as method_record
 from app.perception import resample
-from app.sim.cell import CellConfig
+from app.simcell.cell import CellConfig
 from app.training.views import CAMERAS, kinect_cloud
 from hardware.sim.kinect import look_at
 

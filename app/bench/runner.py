@@ -22,7 +22,7 @@ from app.bench.protocol import BenchConfig, Trial, trials
 from app.io_utils import write_json
 from app.nift.template import weights_id
 from app.predict.methods import method as method_record
-from app.tasks.library import task_templates
+from app.tasks.demo_library import task_templates
 from app.tasks.task import task
 
 FORMAT = "nift-bench/1"

@@ -19,11 +19,11 @@ from app.motion.scene import PlanningScene
 from app.objects.library import LibraryObject, load_object
 from app.predict.methods import method as method_record
 from app.predict.predict import predict
-from app.sim.cell import CellConfig, SimCell, add_fixtures
-from app.sim.jobs import JobSpec, run_sim_job, spawn_test_object
-from app.sim.judges import judge_grasp, judge_place, judged_copy
-from app.sim.oracle import oracle_prediction
-from app.sim.spawn import SpawnedObject
+from app.simcell.cell import CellConfig, SimCell, add_fixtures
+from app.simcell.sim_job import JobSpec, run_sim_job, spawn_test_object
+from app.simcell.judges import judge_grasp, judge_place, judged_copy
+from app.simcell.oracle import oracle_prediction
+from app.simcell.spawn import SpawnedObject
 from app.tasks.task import task
 from hardware.gripper_geometry import lowest_point
 from hardware.sim.world import SimWorld, SimWorldConfig

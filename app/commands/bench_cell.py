@@ -16,7 +16,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from app.bench.cell import run_cell_benchmark
+    from app.bench.cell_speed import run_cell_benchmark
 
     print_figures(run_cell_benchmark(quick=args.quick, seed=args.seed), args.json)
     return 0

@@ -47,7 +47,7 @@ def run(args: argparse.Namespace) -> int:
 
     from tqdm import tqdm
 
-    from app.bench.jobs import run_jobs_benchmark
+    from app.bench.job_series import run_jobs_benchmark
 
     with tqdm(total=jobs * len(tasks), unit="job", desc="bench-jobs") as bar:
         figures = run_jobs_benchmark(jobs, job, args.pose, args.seed, tasks, cell_cfg, args.calibration,

@@ -20,8 +20,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from app.sim.calibration import calibrate_sim_cell, result_record
-    from app.sim.cell import SimCell
+    from app.simcell.calibration import calibrate_sim_cell, result_record
+    from app.simcell.cell import SimCell
     from calibration.store import save_calibration
 
     from app.io_utils import writable_file

@@ -35,9 +35,9 @@ def run(args: argparse.Namespace) -> int:
     from app.io_utils import atomic_path
     from app.objects import split
     from app.perception import object_cloud
-    from app.sim.calibration import ensure_calibration
-    from app.sim.cell import SimCell
-    from app.sim.spawn import SCALE_RANGE, spawn
+    from app.simcell.calibration import ensure_calibration
+    from app.simcell.cell import SimCell
+    from app.simcell.spawn import SCALE_RANGE, spawn
 
     from app.io_utils import writable_file
 

@@ -80,9 +80,9 @@ def _run_sim(args: argparse.Namespace, t, config, source=None) -> list:
     from tqdm import tqdm
 
     from app.motion.scene import PlanningScene
-    from app.sim.calibration import ensure_calibration
-    from app.sim.cell import SimCell
-    from app.sim.jobs import JobSpec, run_series
+    from app.simcell.calibration import ensure_calibration
+    from app.simcell.cell import SimCell
+    from app.simcell.sim_job import JobSpec, run_series
 
     specs = [JobSpec(t, args.seed + i, args.pose, source) for i in range(args.jobs)]
     cell_cfg = cell_config(args, gui=args.gui)

@@ -65,8 +65,8 @@ def run(args: argparse.Namespace) -> int:
     config = replace(config, world=replace(config.world, realtime=args.realtime))
     check_settings(args.port, args.watchdog)  # before the token file is written and the simulator is imported
 
-    from app.sim.cell import SimCell
-    from app.sim.rig import SimRig, rig_service
+    from app.simcell.cell import SimCell
+    from app.simcell.rig import SimRig, rig_service
     from hardware.net.discovery import Advertiser
     from hardware.net.token import DEFAULT_TOKEN_FILE, ensure_token
     from hardware.net.verbs import device_service

@@ -19,7 +19,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from app.sim.cell import SimCell
+    from app.simcell.cell import SimCell
 
     with SimCell(cell_config(args, gui=args.gui)) as cell:
         t0 = time.perf_counter()

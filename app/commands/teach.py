@@ -41,7 +41,7 @@ def read_poses(path: Path):
     """An operator's poses file -> (instance seed, TaughtPoses)."""
     import numpy as np
 
-    from app.sim.teach import TaughtPoses
+    from app.simcell.scripted_demos import TaughtPoses
 
     if not path.is_file():
         raise FileNotFoundError(f"no poses file at {path}")
@@ -77,8 +77,8 @@ def web(args: argparse.Namespace, t, out: Path) -> int:
     writable_directory(out, "--out")
     source = load_object(args.object, category=t.category) if args.object else None
 
-    from app.sim.calibration import ensure_calibration
-    from app.sim.cell import SimCell
+    from app.simcell.calibration import ensure_calibration
+    from app.simcell.cell import SimCell
     from app.teach.page import TeachPage
     from app.teach.session import TeachSession
 
@@ -117,9 +117,9 @@ def run(args: argparse.Namespace) -> int:
         mode = teach_mode(out, args.replace, args.add or (args.poses is not None and not args.replace))
         poses = read_poses(args.poses) if args.poses else None
 
-    from app.sim.cell import SimCell  # bad input has failed by now, before the simulator's imports
-    from app.sim.teach import record_demo, record_task
-    from app.tasks.library import task_demos, task_templates
+    from app.simcell.cell import SimCell  # bad input has failed by now, before the simulator's imports
+    from app.simcell.scripted_demos import record_demo, record_task
+    from app.tasks.demo_library import task_demos, task_templates
 
     log = (lambda line: print(line, file=sys.stderr)) if args.json else print
     recorded = []
@@ -127,7 +127,7 @@ def run(args: argparse.Namespace) -> int:
         templates = task_templates(t, out, rebuild=True)
     else:
         with SimCell(cell_config(args)) as cell, staged(out, mode) as stage:
-            from app.sim.calibration import ensure_calibration
+            from app.simcell.calibration import ensure_calibration
 
             T_base_cam = ensure_calibration(cell, args.calibration)
             first = demo_count(stage)

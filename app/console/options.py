@@ -14,7 +14,7 @@ def add_config_argument(p: argparse.ArgumentParser) -> None:
 def cell_config(args: argparse.Namespace, gui: bool = False):
     """CellConfig from --config (or the defaults), with the camera seeded by --seed."""
     from app.config import load_toml
-    from app.sim.cell import CellConfig
+    from app.simcell.cell import CellConfig
 
     config = load_toml(CellConfig, args.config) if args.config else CellConfig()
     config = replace(config, camera_seed=args.seed)

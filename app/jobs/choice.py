@@ -1,5 +1,5 @@
 """Choose what the cell can do: the first grasp and place pair, in the order of the template loss,
-that the cell can plan (our addition; `app.predict.candidates` ranks the pairs).
+that the cell can plan (our addition; `app.predict.pairs` ranks the pairs).
 
 Cheap tests first, the full plan last: a pair is planned only when the quick reach test
 (`app.motion.ik.reach_failure`: the open gripper hits nothing and some collision-free IK exists,
@@ -22,7 +22,7 @@ import numpy as np
 from app.failures import NoCandidate, NoDemoLikeGrasp, PlanningFailure
 from app.motion.ik import Blocked
 from app.motion.planner import HALF_TURN, FingerWidths, PickPlacePlan, Planner
-from app.predict.candidates import Candidate
+from app.predict.pairs import Candidate
 from hardware.se3 import pose_to_ur
 
 Failure = Callable[[np.ndarray, str], "Blocked | None"]  # TCP pose (4, 4), what it is -> why not, or None

@@ -13,11 +13,11 @@ from app.jobs.settings import JobConfig, is_hang
 from app.layout import fixture_meshes
 from app.motion.place_line import above_peg, fixture_approach, peg_line_direction
 from app.motion.scene import PlanningScene
-from app.predict.candidates import Candidate
+from app.predict.pairs import Candidate
 from app.predict.hole_places import DemoHang, demo_hang
 from app.predict.methods import method as method_record
 from app.predict.predict import Prediction
-from app.tasks.library import DEMOS_DIR, task_demos
+from app.tasks.demo_library import DEMOS_DIR, task_demos
 from app.tasks.task import Task
 from hardware.interfaces import Arm, DepthCamera, Frame, Gripper
 from hardware.kinematics import UR5Kinematics

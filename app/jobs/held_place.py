@@ -13,7 +13,7 @@ from app.jobs.record import check_held, ur
 from app.jobs.second_look import second_look
 from app.motion.planner import OBJECT, FingerWidths, Planner
 from app.perception import resample
-from app.predict.candidates import Candidate
+from app.predict.pairs import Candidate
 from app.predict.hole_places import with_hole_pairs
 from hardware.se3 import transform_points
 

@@ -45,7 +45,7 @@ from app.motion.scene import PlanningScene
 from app.motion.trajectory import reverse
 from app.nift.imitate import use_threads
 from app.perception import object_points, resample
-from app.predict.candidates import Candidate
+from app.predict.pairs import Candidate
 from app.predict.grasp_centering import held_width
 from app.predict.hole_places import with_hole_pairs
 from app.predict.predict import Prediction, predict, predict_place

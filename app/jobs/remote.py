@@ -1,6 +1,6 @@
 """Jobs against devices on the network (`nift run --devices net`): the unchanged job
 (`app.jobs.job.run_job`) drives `NetArm`, `NetGripper` and `NetCamera`, found with zeroconf or at
-given addresses; the served cell's test rig (kind "sim", `app.sim.rig`) spawns each job's object
+given addresses; the served cell's test rig (kind "sim", `app.simcell.rig`) spawns each job's object
 and judges it. Nothing here imports the simulator: the cell runs in `nift serve`'s process."""
 from __future__ import annotations
 

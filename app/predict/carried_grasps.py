@@ -22,7 +22,7 @@ import numpy as np
 
 from app.nift.candidates import IDENTITY, CandidateConfig, leaders
 from app.nift.imitate import Imitation
-from app.predict.candidates import Candidate, excess
+from app.predict.pairs import Candidate, excess
 from app.predict.feasibility import Predicate
 
 Losses = Callable[[np.ndarray], np.ndarray]  # grasp poses (K, 4, 4) -> (K,) their Eq. 5 losses

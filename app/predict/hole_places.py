@@ -25,7 +25,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from app.predict.candidates import Candidate
+from app.predict.pairs import Candidate
 from app.predict.feasibility import carries_like_demos, demo_carries
 from app.predict.handle_hole import Hole, HoleConfig, find_hole
 from hardware.se3 import invert, make_pose

@@ -16,7 +16,7 @@ class Family(Enum):
 
     TEMPLATE = "template"  # imitate the demos' NIT templates (Eq. 5): `app.predict.predict`
     REGISTRATION = "registration"  # register the demos' clouds to the target (CPD): `app.predict.predict`
-    ORACLE = "oracle"  # the simulator's true poses, an upper bound: `app.sim.oracle`, simulation only
+    ORACLE = "oracle"  # the simulator's true poses, an upper bound: `app.simcell.oracle`, simulation only
 
 
 @dataclass(frozen=True)

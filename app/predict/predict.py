@@ -35,7 +35,7 @@ from app.nift.field import load_field
 from app.nift.imitate import imitate, losses_at, symmetries_of
 from app.nift.template import FEATURES, field_override
 from app.objects import fixture
-from app.predict.candidates import Candidate, excess, ranked_pairs
+from app.predict.pairs import Candidate, excess, ranked_pairs
 from app.predict.carried_grasps import carried_pairs, carried_places
 from app.predict.feasibility import (Reach, all_of, carries_like_demos,
                                      demo_carries, grips_something, reaches)
@@ -46,7 +46,7 @@ from app.predict.config import PredictConfig
 from app.predict.methods import Family, Method
 from app.predict.methods import method as method_record
 from app.predict.peg_centering import center_on_peg
-from app.tasks.library import (DEMOS_DIR, STAGES, stage_anchor, task_demos,
+from app.tasks.demo_library import (DEMOS_DIR, STAGES, stage_anchor, task_demos,
                                task_templates)
 from app.tasks.task import Task
 from hardware.se3 import invert
@@ -55,7 +55,7 @@ from hardware.se3 import invert
 @dataclass
 class Prediction:
     """What a method predicts for one cloud, with its costs; `candidates` (template methods) are the
-    grasp and place pairs a cell may execute instead, best first (`app.predict.candidates`)."""
+    grasp and place pairs a cell may execute instead, best first (`app.predict.pairs`)."""
 
     method: str
     T_base_tcp: np.ndarray

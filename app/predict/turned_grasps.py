@@ -15,7 +15,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from app.predict.candidates import Candidate
+from app.predict.pairs import Candidate
 from app.predict.feasibility import grips_something
 from app.predict.handle_hole import kasa_circle
 from hardware.se3 import make_pose, rotvec_to_matrix

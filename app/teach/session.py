@@ -11,7 +11,7 @@ happened or why not):
 3. `close_gripper`: the gripper closes; the object counts as held if the gripper detects it and it
    rises with a 5 cm lift (`LIFT`).
 4. `guide` again carries it (the operator holds the arm, the object moves with the fingers).
-5. `release`: the fingers open where it is; the place judge (`app.sim.judges`) rules on that pose.
+5. `release`: the fingers open where it is; the place judge (`app.simcell.judges`) rules on that pose.
 6. `save_demo`: the grasp judge is run too, and a demo (cloud, poses, intrinsics, extrinsics) is
    written with the task's templates rebuilt, both in a staging folder swapped in whole
    (`app.tasks.staging`); nothing is saved half-way.
@@ -36,11 +36,11 @@ from app.objects.library import LibraryObject
 from app.perception import object_cloud
 from app.predict.config import PredictConfig
 from app.predict.predict import Prediction, predict
-from app.sim.cell import SimCell, add_fixtures
-from app.sim.judges import Verdict, judge_grasp, judge_place, judged_copy
-from app.sim.spawn import SpawnedObject, spawn
+from app.simcell.cell import SimCell, add_fixtures
+from app.simcell.judges import Verdict, judge_grasp, judge_place, judged_copy
+from app.simcell.spawn import SpawnedObject, spawn
 from app.tasks.demo import DEMO_GLOB, Demo, intrinsics_record, load_demo, save_demo
-from app.tasks.library import task_templates
+from app.tasks.demo_library import task_templates
 from app.tasks.staging import staged
 from app.tasks.task import Task
 from hardware.se3 import invert, make_pose, pose_to_ur, rotvec_to_matrix, ur_to_pose

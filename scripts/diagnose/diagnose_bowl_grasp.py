@@ -24,7 +24,7 @@ from app.objects import split
 from app.predict.config import PredictConfig
 from app.predict.predict import predict
 from app.tasks.anchors import anchor_mesh
-from app.tasks.library import DEMOS_DIR, task_demos
+from app.tasks.demo_library import DEMOS_DIR, task_demos
 from app.tasks.task import task, teacher_grasp
 from hardware.se3 import invert
 

@@ -22,8 +22,8 @@ from app.nift.imitate import imitate
 from app.nift.template import FEATURES, field_override
 from app.predict.feasibility import grips_something
 from app.predict.grasp_centering import center_grasp, swept_points
-from app.sim.judges import judge_grasp
-from app.tasks.library import task_templates
+from app.simcell.judges import judge_grasp
+from app.tasks.demo_library import task_templates
 from app.tasks.task import task
 
 parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])

@@ -7,8 +7,8 @@ The teacher's TCP frame: y across the wall towards the bowl's axis, z the approa
 import numpy as np
 
 from app.objects import split
-from app.sim.judges import judge_grasp
-from app.sim.spawn import spawn
+from app.simcell.judges import judge_grasp
+from app.simcell.spawn import spawn
 from app.tasks.task import teacher_grasp
 from hardware.se3 import make_pose, rotvec_to_matrix
 from hardware.sim.world import SimWorld, SimWorldConfig

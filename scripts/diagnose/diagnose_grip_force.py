@@ -8,7 +8,7 @@ import sys
 
 import numpy as np
 
-from app.sim.cell import CellConfig, SimCell
+from app.simcell.cell import CellConfig, SimCell
 from hardware.bullet import p
 
 

@@ -13,9 +13,9 @@ from dataclasses import replace
 import numpy as np
 
 from app.objects import generate, rack, semantics, split
-from app.sim.cell import CellConfig, SimCell
-from app.sim.hang_gap import bullet_gap, mesh_gap
-from app.sim.spawn import spawn
+from app.simcell.cell import CellConfig, SimCell
+from app.simcell.hang_gap import bullet_gap, mesh_gap
+from app.simcell.spawn import spawn
 from app.tasks.teacher import hang_pose
 
 

@@ -19,9 +19,9 @@ from app.nift.imitate import imitate, losses_at
 from app.perception import object_cloud
 from app.predict.carried_grasps import medoid
 from app.predict.feasibility import demo_carries
-from app.sim.cell import CellConfig, SimCell
-from app.sim.jobs import reset_arm, spawn_test_object, oracle_predictor
-from app.tasks.library import DEMOS_DIR, task_demos, task_templates
+from app.simcell.cell import CellConfig, SimCell
+from app.simcell.sim_job import reset_arm, spawn_test_object, oracle_predictor
+from app.tasks.demo_library import DEMOS_DIR, task_demos, task_templates
 from app.tasks.task import task
 from hardware.se3 import invert, make_pose, rotvec_to_matrix
 

@@ -13,8 +13,8 @@ from rack_judge import RackJudge
 from app.bench.imitation import target
 from app.nift.imitate import ImitationConfig, imitate
 from app.objects import fixture, semantics, split
-from app.sim.cell import CellConfig
-from app.tasks.library import task_templates
+from app.simcell.cell import CellConfig
+from app.tasks.demo_library import task_templates
 from app.tasks.task import task
 from hardware.se3 import invert
 

@@ -21,10 +21,10 @@ from app.jobs.job import JobConfig
 from app.motion.scene import PlanningScene
 from app.predict.config import PredictConfig
 from app.predict.predict import predict
-from app.sim.calibration import ensure_calibration
-from app.sim.cell import CellConfig, SimCell
-from app.sim.jobs import JobSpec, oracle_predictor, run_sim_job
-from app.sim.judges import judge_place, judged_copy
+from app.simcell.calibration import ensure_calibration
+from app.simcell.cell import CellConfig, SimCell
+from app.simcell.sim_job import JobSpec, oracle_predictor, run_sim_job
+from app.simcell.judges import judge_place, judged_copy
 from app.tasks.task import task
 
 CANDIDATES = 8

@@ -14,8 +14,8 @@ from app.bench.imitation import target
 from app.nift.imitate import ImitationConfig, imitate
 from app.objects import fixture, semantics, split
 from app.predict.peg_centering import center_on_peg, peg_frame
-from app.sim.cell import CellConfig
-from app.tasks.library import task_templates
+from app.simcell.cell import CellConfig
+from app.tasks.demo_library import task_templates
 from app.tasks.task import task
 from hardware.se3 import invert, transform_points
 

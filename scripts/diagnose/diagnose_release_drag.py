@@ -18,9 +18,9 @@ import numpy as np
 
 from app.jobs.job import JobConfig
 from app.motion.scene import PlanningScene
-from app.sim.calibration import ensure_calibration
-from app.sim.cell import CellConfig, SimCell
-from app.sim.jobs import JobSpec, SimHooks, run_sim_job
+from app.simcell.calibration import ensure_calibration
+from app.simcell.cell import CellConfig, SimCell
+from app.simcell.sim_job import JobSpec, SimHooks, run_sim_job
 from app.tasks.task import task
 from hardware.bullet import p
 from hardware.se3 import invert, ur_to_pose

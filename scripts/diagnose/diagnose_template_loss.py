@@ -12,8 +12,8 @@ from app.bench.imitation import target
 from app.nift.field import load_field
 from app.nift.imitate import ImitationConfig, imitate
 from app.objects import split
-from app.sim.cell import CellConfig
-from app.tasks.library import task_templates
+from app.simcell.cell import CellConfig
+from app.tasks.demo_library import task_templates
 from app.tasks.task import task, teacher_grasp, teacher_place
 from hardware.se3 import invert
 

@@ -2,9 +2,9 @@
 (`diagnose_mug_place.py`, `diagnose_peg_centering.py`): does a test mug hang at a pose?"""
 import numpy as np
 
-from app.sim.cell import CellConfig, add_fixtures
-from app.sim.judges import judge_place
-from app.sim.spawn import spawn
+from app.simcell.cell import CellConfig, add_fixtures
+from app.simcell.judges import judge_place
+from app.simcell.spawn import spawn
 from hardware.sim.world import SimWorld, SimWorldConfig
 
 

@@ -20,7 +20,7 @@ from app.categories import POSES
 from app.objects import generate
 from app.objects.collision import collision_model, visual_model
 from app.objects.library import LibraryObject
-from app.sim.cell import WORKSPACE
+from app.simcell.cell import WORKSPACE
 from hardware.bullet import p, pose_to_pybullet
 from hardware.se3 import make_pose, random_rotations, rotvec_to_matrix
 from hardware.sim.world import SimWorld

@@ -7,9 +7,9 @@ import numpy as np
 
 from app.bench.geometry import best_time
 from app.perception import object_cloud
-from app.sim.calibration import calibrate_sim_cell
-from app.sim.cell import CellConfig, SimCell
-from app.sim.spawn import spawn
+from app.simcell.calibration import calibrate_sim_cell
+from app.simcell.cell import CellConfig, SimCell
+from app.simcell.spawn import spawn
 from hardware.robot_description import HOME_Q
 
 

@@ -19,7 +19,7 @@ from typing import Callable
 
 import numpy as np
 
-from app.sim.spawn import SpawnedObject, hold, release, spawn
+from app.simcell.spawn import SpawnedObject, hold, release, spawn
 from hardware.bullet import p
 from hardware.gripper_geometry import GripperGeometry
 from hardware.sim.floating_gripper import FloatingGripper

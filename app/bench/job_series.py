@@ -13,8 +13,8 @@ from app.failures import INTERNAL_ERROR, NoDemoLikeGrasp
 from app.io_utils import write_json
 from app.jobs.job import JobConfig, JobResult
 from app.motion.scene import PlanningScene
-from app.sim.cell import CellConfig, SimCell
-from app.sim.jobs import JobSpec, fresh_client_before, run_series
+from app.simcell.cell import CellConfig, SimCell
+from app.simcell.sim_job import JobSpec, fresh_client_before, run_series
 from app.tasks.task import task
 
 
@@ -64,7 +64,7 @@ def run_jobs_benchmark(jobs: int = 20, job: JobConfig = JobConfig(), pose: str =
     comes from the `calibration` file (calibrating first if it is missing), or is the true one;
     `records`: every job's record, as a JSON list, written there (atomically) at the end; `job`: how each
     job runs (its method, its second look, ...)."""
-    from app.sim.calibration import ensure_calibration
+    from app.simcell.calibration import ensure_calibration
 
     figures: dict = {"method": job.method, "pose": pose, "jobs_per_task": jobs}
     every: list[dict] = []

@@ -18,11 +18,11 @@ from app.motion.scene import PlanningScene
 from app.objects import split
 from app.objects.library import LibraryObject
 from app.predict.methods import method as method_record
-from app.sim.cell import SimCell
-from app.sim.judges import resting_verdict
-from app.sim.oracle import REVOLUTION, TURNS, oracle_prediction
-from app.sim.snapshots import save_strip, snapshot
-from app.sim.spawn import SCALE_RANGE, SpawnedObject, release, spawn
+from app.simcell.cell import SimCell
+from app.simcell.judges import resting_verdict
+from app.simcell.oracle import REVOLUTION, TURNS, oracle_prediction
+from app.simcell.snapshots import save_strip, snapshot
+from app.simcell.spawn import SCALE_RANGE, SpawnedObject, release, spawn
 from app.tasks.task import Task
 from hardware.sim.world import SimWorld
 
@@ -94,7 +94,7 @@ def start_job(cell: SimCell, spec: JobSpec) -> SpawnedObject:
 
 def oracle_predictor(cell: SimCell, obj: SpawnedObject, t: Task) -> Predictor:
     """The oracle's poses for the object where it is when the job asks (after a miss it may have moved);
-    for a body of revolution, its grasp turned about the object's axis too (`app.sim.oracle`)."""
+    for a body of revolution, its grasp turned about the object's axis too (`app.simcell.oracle`)."""
     T_base_fixture = cell.config.fixture_pose(t.fixture)
     turns = TURNS if t.category in REVOLUTION else 1
     return lambda cloud: oracle_prediction(t, obj.mesh, obj.scale, cell.world.pose(obj.body), T_base_fixture, turns)

@@ -9,7 +9,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from app.sim.cell import SimCell
+from app.simcell.cell import SimCell
 from calibration.board import BoardSpec
 from calibration.eye_to_hand import CalibrationResult, aim_poses, collect, solve
 from calibration.store import load_calibration, save_calibration

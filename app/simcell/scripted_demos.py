@@ -4,7 +4,7 @@ One demo: an upright object of the task's category (train split) is spawned; the
 it and perception cuts out its cloud (with the calibrated camera pose); the operator's grasp
 (T_obj_tcp) and place (T_fixture_obj) - from a file, or the scripted teacher's - are checked with
 the success judges; only a demo whose grasp and place both succeed is kept. The task's templates
-are then rebuilt from all its demos (`app.tasks.library`).
+are then rebuilt from all its demos (`app.tasks.demo_library`).
 """
 from __future__ import annotations
 
@@ -16,9 +16,9 @@ import numpy as np
 
 from app.objects import split
 from app.perception import object_cloud
-from app.sim.cell import SimCell
-from app.sim.judges import judge_grasp, judge_place
-from app.sim.spawn import spawn
+from app.simcell.cell import SimCell
+from app.simcell.judges import judge_grasp, judge_place
+from app.simcell.spawn import spawn
 from app.tasks.demo import Demo, intrinsics_record, save_demo
 from app.tasks.task import Task, teacher_grasp, teacher_place
 

@@ -6,7 +6,7 @@ import numpy as np
 import trimesh
 
 from app.categories import REVOLUTION
-from app.predict.candidates import Candidate
+from app.predict.pairs import Candidate
 from app.predict.methods import ORACLE
 from app.predict.predict import Prediction
 from app.tasks.task import Task, teacher_grasp, teacher_place

@@ -6,10 +6,10 @@ talks only to the arm, gripper and camera services (`app.jobs.remote`)."""
 from __future__ import annotations
 
 from app.categories import POSES
-from app.sim.calibration import calibrate_sim_cell, result_record
-from app.sim.cell import SimCell
-from app.sim.jobs import JobSpec, SimHooks, start_job, oracle_predictor
-from app.sim.spawn import release
+from app.simcell.calibration import calibrate_sim_cell, result_record
+from app.simcell.cell import SimCell
+from app.simcell.sim_job import JobSpec, SimHooks, start_job, oracle_predictor
+from app.simcell.spawn import release
 from app.tasks.task import TASKS, task
 from hardware.net import checks
 from hardware.net.verbs import Service, Verb, arg

@@ -71,7 +71,7 @@ class SimCell:
     def refresh(self) -> None:
         """The same cell in a fresh physics client (devices reconnected, the arm home): PyBullet never
         frees a mesh shape, even when its body is removed (1.8 MB a spawned object), only a whole
-        client; a long series of jobs refreshes now and then (`app.sim.jobs.run_series`)."""
+        client; a long series of jobs refreshes now and then (`app.simcell.sim_job.run_series`)."""
         self.disconnect()
         self.connect()
 
