@@ -205,6 +205,24 @@ class Arm(Device):
         """True while in freedrive."""
 
 
+class StopState:
+    """What an arm's controller keeps about its last stop, as ur_rtde reports it: a protective stop
+    until unlocked, and the last motion's error ('' when it completed). Implementations set
+    `_stopped` and `_last_error` where their motions end."""
+
+    _stopped: bool = False
+    _last_error: str = ""
+
+    def isProtectiveStopped(self) -> bool:
+        return self._stopped
+
+    def unlockProtectiveStop(self) -> None:
+        self._stopped = False
+
+    def getLastError(self) -> str:
+        return self._last_error
+
+
 class Gripper(Device):
     """A parallel two-finger gripper."""
 

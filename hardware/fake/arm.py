@@ -10,7 +10,7 @@ import numpy as np
 
 from hardware.fake.world import FakeWorld
 from hardware.gripper_geometry import GripperGeometry
-from hardware.interfaces import Arm, JointLimits, ProtectiveStopError
+from hardware.interfaces import Arm, JointLimits, ProtectiveStopError, StopState
 from hardware.kinematics import UR5Kinematics
 from hardware.robot_description import HOME_Q
 from hardware.se3 import interpolate_pose, pose_to_ur, ur_to_pose
@@ -46,7 +46,7 @@ class FakeArmConfig:
     home_q: tuple[float, ...] = tuple(HOME_Q)
 
 
-class FakeArm(Arm):
+class FakeArm(StopState, Arm):
     """An `Arm` whose motions arrive at once, unless interrupted; every motion is kept in `motions`."""
 
     def __init__(self, config: FakeArmConfig = FakeArmConfig(), world: FakeWorld | None = None) -> None:
@@ -116,15 +116,6 @@ class FakeArm(Arm):
     def stopJ(self, deceleration: float = 2.0) -> None:
         self.require_connected()
         self.stops += 1
-
-    def isProtectiveStopped(self) -> bool:
-        return self._stopped
-
-    def unlockProtectiveStop(self) -> None:
-        self._stopped = False
-
-    def getLastError(self) -> str:
-        return self._last_error
 
     def getActualTCPForce(self) -> np.ndarray:
         return np.zeros(6)

@@ -8,7 +8,7 @@ import numpy as np
 import open3d as o3d
 import trimesh
 
-from hardware.fake.world import FakeWorld
+from hardware.fake.world import FakeWorld, NoLink
 from hardware.interfaces import CameraIntrinsics, DepthCamera, Frame
 
 TABLE = trimesh.creation.box((2.0, 2.0, 0.02), trimesh.transformations.translation_matrix([0.5, 0.0, -0.01]))
@@ -23,19 +23,13 @@ class FakeCameraConfig:
                                                     cy=205.395)
 
 
-class FakeCamera(DepthCamera):
+class FakeCamera(NoLink, DepthCamera):
     """A `DepthCamera` that renders the fake world as it is at each capture."""
 
     def __init__(self, world: FakeWorld, config: FakeCameraConfig = FakeCameraConfig()) -> None:
         super().__init__(config)
         self.world = world
         self.captures = 0
-
-    def _connect(self) -> None:
-        pass
-
-    def _disconnect(self) -> None:
-        pass
 
     @property
     def intrinsics(self) -> CameraIntrinsics:

@@ -8,6 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from hardware.fake.arm import FakeArm
+from hardware.fake.world import NoLink
 from hardware.gripper_geometry import GripperGeometry
 from hardware.interfaces import Gripper
 
@@ -18,7 +19,7 @@ class FakeGripperConfig:
     max_force: float = GripperGeometry().max_force
 
 
-class FakeGripper(Gripper):
+class FakeGripper(NoLink, Gripper):
     """A `Gripper` on a `FakeArm`: what it holds follows the arm's TCP in the arm's world."""
 
     def __init__(self, arm: FakeArm, config: FakeGripperConfig = FakeGripperConfig()) -> None:
@@ -27,12 +28,6 @@ class FakeGripper(Gripper):
         self._width, self._detected = config.stroke, False
         self.jams: list[float] = []  # scripted: each opening while holding stops at the next of these widths (m)
         self.fallen: np.ndarray | None = None  # where a dropped object comes to rest (T_base_obj); None: below the TCP
-
-    def _connect(self) -> None:
-        pass
-
-    def _disconnect(self) -> None:
-        pass
 
     @property
     def stroke(self) -> float:

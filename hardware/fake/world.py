@@ -10,6 +10,16 @@ import trimesh
 from hardware.se3 import invert
 
 
+class NoLink:
+    """A fake device has no link to open or close: connect() and disconnect() only flip its state."""
+
+    def _connect(self) -> None:
+        pass
+
+    def _disconnect(self) -> None:
+        pass
+
+
 @dataclass
 class FakeObject:
     """A rigid mesh (its own frame) at pose T_base_obj; `T_tcp_obj` while a gripper holds it."""

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from hardware.bullet import p
-from hardware.interfaces import Arm, JointLimits, ProtectiveStopError
+from hardware.interfaces import Arm, JointLimits, ProtectiveStopError, StopState
 from hardware.motion_profile import ruckig_profile
 from hardware.gripper_geometry import PALM_LINK
 from hardware.robot_description import HOME_Q
@@ -49,7 +49,7 @@ class SimArmConfig:
                             ("contact_detection_time", 0.0, 1.0, "s", True)))
 
 
-class SimArm(Arm):
+class SimArm(StopState, Arm):
     """The UR5 in PyBullet, driven through ur_rtde-style verbs."""
 
     def __init__(self, config: SimArmConfig, robot: SimRobot) -> None:
@@ -106,15 +106,6 @@ class SimArm(Arm):
 
     def getTCPOffset(self) -> np.ndarray:
         return pose_to_ur(self.robot.kinematics.T_tool0_tcp)
-
-    def isProtectiveStopped(self) -> bool:
-        return self._stopped
-
-    def unlockProtectiveStop(self) -> None:
-        self._stopped = False
-
-    def getLastError(self) -> str:
-        return self._last_error
 
     # freedrive -------------------------------------------------------------------------------
     def teachMode(self) -> bool:
