@@ -1,1 +1,2 @@
-"""The simulated cell around the devices: world, spawning, judges, the oracle, teach-in, sim jobs, calibration."""
+"""The simulated cell around the devices: the cell, spawning, judges, the oracle, a job in the cell
+(`sim_job`), the scripted demonstrator's demos (`scripted_demos`), calibration, the test rig."""
