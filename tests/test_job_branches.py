@@ -264,3 +264,43 @@ def test_every_failure_kind_names_one_class():
     assert len(named) == len(set(named)) and {"no_ik", "no_path", "path_collides", "protective_stop", "contact_stop",
                                               "grasp_missed", "place_missed", "no_demo_like_grasp"} <= set(named)
     assert INTERNAL_ERROR not in named
+
+
+def looking(calls: list, place=None):
+    """A placer for the second look that offers `place` (or nothing) and records what it was shown."""
+    def placer(cloud: np.ndarray, T_grasp: np.ndarray, starts: np.ndarray) -> list[Candidate]:
+        calls.append(len(cloud))
+        if place is None:
+            return []
+        seen, T_fixture = place
+        return [Candidate(T_grasp, seen, T_fixture, 0.0, 0, 0)]
+    return placer
+
+
+def run_looking(cell: Cell, scene: PlanningScene, predictor, placer, config: JobConfig = JobConfig(second_look=True)):
+    return run_job(task("bottle"), cell.arm, cell.gripper, cell.camera, cell.camera.config.T_base_cam,
+                   CellLayout().fixture_pose("shelf"), scene, config, None, predictor, placer)
+
+
+def test_a_second_look_places_where_the_held_views_say(cell, scene):
+    shown = []
+    result = run_looking(cell, scene, predictor_of(grasp()), looking(shown, shelf_place(x=0.45)))
+    assert result.success, result.reason
+    assert shown == [1024] and result.look["used"] and result.look["new_points"] > 100
+    assert result.look["place_moved_m"] == pytest.approx(0.05, abs=1e-3)
+    assert np.linalg.norm(cell.bottle.T_base_obj[:2, 3] - [0.45, -0.45]) < 0.01  # where the look sent it
+    turned = [m for m in cell.arm.motions if m.verb == "executeTrajectory" and np.allclose(m.q_start[:5], m.q_end[:5])]
+    assert any(abs(abs(m.q_end[5] - m.q_start[5]) - np.pi) < 1e-6 for m in turned)  # the wrist's half-turn
+
+
+def test_a_second_look_with_no_place_of_its_own_carries_on_with_the_first_look_s(cell, scene):
+    result = run_looking(cell, scene, predictor_of(grasp()), looking([]))
+    assert result.success, result.reason
+    assert not result.look["used"] and result.look["why"] == "no place" and placed_on_the_shelf(cell)
+
+
+def test_a_grasp_whose_first_look_place_is_out_of_reach_is_picked_and_placed_from_the_look(cell, scene):
+    result = run_looking(cell, scene, predictor_of(grasp(), place=shelf_place(x=1.6)), looking([], shelf_place()))
+    assert result.success, result.reason
+    assert result.candidates[-1]["outcome"].startswith("planned (pick only") and result.look["pick_only"]
+    assert placed_on_the_shelf(cell)

@@ -33,7 +33,7 @@ from app.failures import INTERNAL_ERROR, CellFailure, GraspMissed, NoCandidate, 
 from app.jobs.check import sighting
 from app.jobs.choice import choose, describe
 from app.jobs.clearance import gripper_clear
-from app.jobs.context import JobContext, Predictor
+from app.jobs.context import JobContext, Placer, Predictor
 from app.jobs.guarded import guarded_leave, guarded_line, guarded_place
 from app.jobs.held_place import look_and_place
 from app.jobs.record import STAGES, JobHooks, JobResult, check_held, ur
@@ -72,20 +72,23 @@ APPROACH_ARRIVED = 0.007  # m: an approach stopped by a contact this close to th
 
 def run_job(t: Task, arm: Arm, gripper: Gripper, camera: DepthCamera, T_base_cam: np.ndarray,
             T_base_fixture: np.ndarray, scene: PlanningScene, config: JobConfig = JobConfig(),
-            hooks: JobHooks | None = None, predictor: Predictor | None = None) -> JobResult:
+            hooks: JobHooks | None = None, predictor: Predictor | None = None,
+            placer: Placer | None = None) -> JobResult:
     """Run one pick-and-place job of task t; never raises for a failed stage - it is in the result, with
     its kind (`app.failures`); an exception that is no CellFailure is a bug: the result says
     "internal_error", the traceback goes to the log, and the arm is made safe as after a failure.
 
     `predictor(cloud)` gives the grasp and place; by default the configured method on the task's demos.
-    A template method (not cpd, not the oracle) imitates the place again after the second look
-    (`config.second_look`)."""
+    A job that takes the second look (`config.second_look`; template methods only) chooses the place
+    again with `placer(held cloud, grasp, starts)`; by default the method imitates it again."""
     hooks = hooks or JobHooks()
     result = JobResult(t.name, config.method)
     use_threads(config.threads)
     kin = UR5Kinematics(tcp_offset=ur_to_pose(arm.getTCPOffset()))
-    placer, settings = None, config.predict
-    if looks_again(config, t):
+    settings = config.predict
+    if not looks_again(config, t):
+        placer = None
+    elif placer is None:
         def placer(cloud: np.ndarray, T_grasp: np.ndarray, starts: np.ndarray) -> list[Candidate]:
             return predict_place(t, cloud, T_grasp, settings, T_base_fixture, starts)
     if predictor is None:
