@@ -137,7 +137,7 @@ def _report(results: list, args: argparse.Namespace, t) -> int:
 
 
 def _line(r) -> str:
-    what = "ok" if r.success else f"FAILED at {r.failed_stage}: {r.reason}"
+    what = "ok" if r.success else f"FAILED at {r.failed_stage} ({r.failure_kind}): {r.reason}"
     which = r.info.get("object") or f"{r.task} {r.info['instance']}"
     return f"seed {r.info['seed']} ({which}, scale {r.info['scale']}): {what}"
 
