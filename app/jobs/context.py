@@ -50,7 +50,7 @@ class JobContext:
     fell: bool = False  # a place missed: looks cover the table around the fixture (`JobConfig.fallen_perception`)
 
     def stage(self, name: str):
-        """Time stage `name` and turn its expected errors into JobFailed (`app.jobs.record.stage`)."""
+        """Time stage `name`; a failure in it is recorded as this stage's (`app.jobs.record.stage`)."""
         return stage(self.result, name, self.hooks)
 
     @cached_property
