@@ -48,6 +48,7 @@ def _summary_after(rows, config):
     return summarise(rows, list(config.tasks), list(config.poses), list(config.methods))
 
 
+@pytest.mark.slow
 def test_same_seed_same_table_and_an_interrupted_run_resumes_to_it(tmp_path):
     config = BenchConfig(tasks=("bowl", "bottle"), poses=("upright",), methods=(ORACLE, "cpd"), trials=1)
     first = _summary_after(run(config, tmp_path / "a", workers=1), config)

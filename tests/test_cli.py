@@ -72,6 +72,7 @@ def test_bench_geometry_quick_reports_every_figure():
     assert figures["ibs_gap_max_mm"] < figures["ibs_sample_spacing_mm"]
 
 
+@pytest.mark.slow
 def test_sim_and_capture_write_what_they_say(tmp_path):
     out = nift("sim", "--json")
     assert out.returncode == 0, out.stderr

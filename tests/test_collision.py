@@ -13,6 +13,7 @@ def bullet():
     p.disconnect(client)
 
 
+@pytest.mark.slow
 def test_mug_collision_model_keeps_handle_hole_and_cavity(bullet, nift_cache):
     mesh = objects.generate("mug", 2)
     sem = objects.semantics(mesh)
