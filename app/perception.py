@@ -18,6 +18,7 @@ from app.failures import BadFrame, ObjectNotSeen
 from app.nift.raycast import scene_of, unsigned_distance
 from hardware.gripper_geometry import GripperGeometry
 from hardware.interfaces import Frame
+from hardware.settings import check_integers, check_ranges
 
 
 DEPTH_MAX = 10.0  # m: farther depth pixels are dropped
@@ -39,6 +40,17 @@ class PerceptionConfig:
     n_points: int = 1024
     seed: int = 0
     known_margin: float = 0.015  # m: points this near a known fixture's surface are the fixture (noise: a few mm)
+
+    def __post_init__(self) -> None:
+        check_integers(self, ("cluster_min_points", "outlier_neighbors", "n_points", "seed"))
+        check_ranges(self, (("plane_threshold", 0.0, 0.1, "m", False), ("above_plane", 0.0, 0.1, "m", True),
+                            ("cluster_eps", 0.0, 0.5, "m", False), ("cluster_min_points", 1, 100_000, "", True),
+                            ("outlier_neighbors", 1, 1000, "", True), ("outlier_std_ratio", 0.0, 100.0, "", False),
+                            ("n_points", 16, 1_000_000, "", True), ("known_margin", 0.0, 0.5, "m", True)))
+        for name in ("x_range", "y_range", "z_range"):
+            low, high = getattr(self, name)
+            if not low < high:
+                raise ValueError(f"{name} must be a range (low, high) with low < high, got {getattr(self, name)!r}")
 
 
 def back_project(frame: Frame, T_base_cam: np.ndarray) -> np.ndarray:

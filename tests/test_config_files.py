@@ -46,6 +46,9 @@ BAD_JOB_FILES = {  # what a file says -> what the one line must name
     "attempts = 0\n": "attempts must be in [1, 100]",
     "place_contact_force = -1.0\n": "place_contact_force must be in (0, 1000] N",
     "[motion]\njoint_sped = 1.0\n": "unknown setting 'joint_sped' for MotionConfig",
+    "[motion]\njoint_speed = -1.0\n": "joint_speed must be in (0, 3.15] rad/s, got -1.0",
+    "[perception]\nz_range = [0.4, -0.03]\n": "z_range must be a range (low, high) with low < high",
+    "[predict.imitation.candidates]\nmost = 0\n": "most must be in [1, 1000], got 0",
 }
 
 

@@ -7,6 +7,7 @@ from dataclasses import dataclass
 from app.motion.ik import IKConfig
 from app.motion.sampling import SamplingConfig
 from hardware.robot_description import HOME_Q
+from hardware.settings import check_integers, check_ranges
 
 
 @dataclass(frozen=True)
@@ -38,3 +39,17 @@ class MotionConfig:
     home_q: tuple[float, ...] = tuple(HOME_Q)
     ik: IKConfig = IKConfig()
     sampling: SamplingConfig = SamplingConfig()
+
+    def __post_init__(self) -> None:
+        check_integers(self, ("short_lever_search", "check_every", "ik_candidates"))
+        check_ranges(self, RANGES)
+
+
+RANGES = (("approach_distance", 0.0, 0.5, "m", False), ("approach_cone", 0.0, 90.0, "degrees", True),
+          ("lift_height", 0.0, 0.5, "m", False), ("peg_clearance", 0.0, 0.1, "m", True), ("peg_short", 0.0, 0.2, "m", True),
+          ("retreat_distance", 0.0, 0.5, "m", False), ("carry_pivot", 0.0, 180.0, "degrees", True),
+          ("pivot_lever", 0.0, 1.0, "m", True), ("short_lever_search", 1, 1_000_000, "states", True),
+          ("joint_speed", 0.0, 3.15, "rad/s", False), ("joint_acceleration", 0.0, 40.0, "rad/s^2", False),
+          ("line_speed", 0.0, 1.0, "m/s", False), ("line_acceleration", 0.0, 10.0, "m/s^2", False),
+          ("line_jerk", 0.0, 100.0, "m/s^3", False), ("check_every", 1, 100, "samples", True),
+          ("end_tolerance", 0.0, 0.5, "rad", False), ("ik_candidates", 1, 8, "branches", True))

@@ -20,6 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from hardware.settings import check_integers, check_ranges
 from hardware.se3 import make_pose, rotation_angle, rotvec_to_matrix
 
 HALF_TURN_Z = make_pose(rotvec_to_matrix([0.0, 0.0, np.pi]))  # a two-finger grasp's symmetry
@@ -36,8 +37,9 @@ class CandidateConfig:
     most: int = 8  # at most this many candidates
 
     def __post_init__(self) -> None:
-        if not (self.margin >= 0 and self.translation >= 0 and self.rotation >= 0 and self.most >= 1):
-            raise ValueError(f"candidate settings must be >= 0 (most >= 1), got {self}")
+        check_integers(self, ("most",))
+        check_ranges(self, (("margin", 0.0, 100.0, "(relative)", True), ("translation", 0.0, 1.0, "m", True),
+                            ("rotation", 0.0, float(np.pi), "rad", True), ("most", 1, 1000, "", True)))
 
 
 def same_pose(poses: np.ndarray, T: np.ndarray, config: CandidateConfig,
