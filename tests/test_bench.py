@@ -213,3 +213,12 @@ def test_memory_growth_across_refreshes_sees_what_stays_and_not_the_sawtooth():
     assert abs(growth_across_refreshes(rss, fresh) - kept) < 1e-9
     assert abs(growth_mb_per_job(rss) - kept) > 0.1  # the second-half slope mixes both
     assert growth_across_refreshes(rss[:every], [0]) is None  # one fresh client: no slope
+
+
+def test_a_job_that_ended_in_a_bug_is_no_trial_of_the_method_and_is_counted_apart():
+    row = {"pose": "upright", "method": "nift", "task": "mug", "grasp": True, "place": True, "overall": True}
+    rows = [row, {**row, "place": False, "overall": False},
+            {**row, "grasp": False, "place": False, "overall": False, "internal_error": True}]
+    cell = summarise(rows, ["mug"], ["upright"], ["nift"])["upright"]["nift"]["mug"]
+    assert cell["n"] == 2 and cell["overall"] == 0.5 and cell["internal_errors"] == 1
+    assert "internal_errors" not in summarise(rows[:2], ["mug"], ["upright"], ["nift"])["upright"]["nift"]["mug"]

@@ -13,15 +13,19 @@ KINDS = ("grasp", "place", "overall")
 
 
 def summarise(rows: list[dict], tasks: list[str], poses: list[str], methods: list[str]) -> dict:
-    """{pose: {method: {task|'mean': {grasp, place, overall, n}}}} - rates over the trials present."""
+    """{pose: {method: {task|'mean': {grasp, place, overall, n}}}} - rates over the trials present; a row
+    whose job ended in a bug of ours (`internal_error`) is no trial of the method: counted apart."""
     out: dict = {}
     for pose in poses:
         for method in methods:
             cells = {}
             for t in tasks:
-                sel = [r for r in rows if r["pose"] == pose and r["method"] == method and r["task"] == t]
+                every = [r for r in rows if r["pose"] == pose and r["method"] == method and r["task"] == t]
+                sel = [r for r in every if not r.get("internal_error")]
                 if sel:
                     cells[t] = {k: round(float(np.mean([r[k] for r in sel])), 3) for k in KINDS} | {"n": len(sel)}
+                    if len(sel) < len(every):
+                        cells[t]["internal_errors"] = len(every) - len(sel)
                     if all("gripper_in_table" in r for r in sel):
                         cells[t]["in_table"] = round(float(np.mean([r["gripper_in_table"] for r in sel])), 3)
             if cells:

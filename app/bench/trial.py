@@ -14,6 +14,7 @@ import time
 import numpy as np
 
 from app.bench.protocol import BenchConfig, Trial, trial_cloud
+from app.failures import INTERNAL_ERROR
 from app.jobs.job import JobConfig
 from app.motion.scene import PlanningScene
 from app.objects.library import LibraryObject, load_object
@@ -125,5 +126,6 @@ class ExecutedBench:
                          "instance": r.info["instance"], "scale": r.info["scale"], "method": method, "grasp": grasp,
                          "place": r.success, "overall": r.success,
                          "why": r.reason if r.success else f"failed at {failed}: {r.reason}",
-                         "seconds": round(sum(r.seconds.values()), 2)})
+                         "seconds": round(sum(r.seconds.values()), 2),
+                         **({"internal_error": True} if r.failure_kind == INTERNAL_ERROR else {})})
         return rows
