@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import json
 import multiprocessing as mp
+import os
 import time
 from dataclasses import asdict
 from pathlib import Path
@@ -24,6 +25,7 @@ from app.nift.template import weights_id
 from app.predict.methods import method as method_record
 from app.tasks.demo_library import task_templates
 from app.tasks.task import task
+from app.workers import die_with_parent
 
 FORMAT = "nift-bench/1"
 ADDED = {"place_demo_match": "mean", "align_grasp": False, "objects": [], "demo_dir": None}  # settings added since the format, with the value runs made before them had
@@ -93,10 +95,13 @@ def pending(config: BenchConfig, out: Path) -> list[Trial]:
     return [tr for tr in trials(config) if not set(config.methods) <= have.get(tr.key, set())]
 
 
-def _init_worker(config: BenchConfig, demo_root: Path) -> None:
+def _init_worker(config: BenchConfig, demo_root: Path, parent: int | None = None) -> None:
+    """Set up this process's bench (`parent`: the pid of the command that spawned it, which it dies with)."""
     global _worker
     import torch
 
+    if parent is not None:
+        die_with_parent(parent)
     from app.bench.trial import ExecutedBench, TeleportedBench
 
     torch.set_num_threads(1)
@@ -125,7 +130,7 @@ def run(config: BenchConfig, out: Path, workers: int = 2, progress: Callable[[in
                 _init_worker(config, demo_root)
                 results = map(_run_trial, todo)
             else:
-                pool = mp.get_context("spawn").Pool(workers, _init_worker, (config, demo_root))
+                pool = mp.get_context("spawn").Pool(workers, _init_worker, (config, demo_root, os.getpid()))
                 results = pool.imap_unordered(_run_trial, todo)
             try:
                 for rows in results:

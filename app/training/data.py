@@ -19,6 +19,7 @@ the same seed gives the same files.
 """
 from __future__ import annotations
 
+import os
 import time
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import asdict, dataclass
@@ -35,6 +36,7 @@ from app.nift.scf import compute_scf
 from app.objects import IN_DOMAIN, check_category, generate, split
 from app.training.manifest import FORMAT, read_manifest
 from app.training.views import CAMERAS, observe
+from app.workers import die_with_parent
 from hardware.se3 import random_rotations
 
 
@@ -175,7 +177,8 @@ def run_shards(cfg: DataConfig, shards: list, todo: list[int], out: Path, worker
     if workers <= 1:
         yield from (make_shard(cfg, i, shards[i], out) for i in todo)
         return
-    with ProcessPoolExecutor(workers, mp_context=get_context("spawn")) as pool:
+    with ProcessPoolExecutor(workers, mp_context=get_context("spawn"), initializer=die_with_parent,
+                             initargs=(os.getpid(),)) as pool:
         futures = [pool.submit(make_shard, cfg, i, shards[i], out) for i in todo]
         yield from (f.result() for f in futures)
 
