@@ -32,5 +32,5 @@ def check_ranges(settings: Any, ranges: tuple[Range, ...]) -> None:
         above = value >= low if closed else value > low
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not (math.isfinite(value) and above
                                                                                   and value <= high):
-            bracket = "[" if closed else "("
-            raise ValueError(f"{name} must be in {bracket}{low:g}, {high:g}]{' ' + unit if unit else ''}, got {value!r}")
+            bracket, unit_ = "[" if closed else "(", f" {unit}" if unit else ""
+            raise ValueError(f"{name} must be in {bracket}{low:g}, {high:g}]{unit_}, got {value!r}")

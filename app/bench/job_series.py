@@ -27,7 +27,7 @@ def summarise(name: str, results: list[JobResult]) -> dict:
     """Figures of one task's series."""
     planned = [r for r in results if r.plan]
     wall = [sum(r.seconds.values()) for r in results]
-    failures = Counter(r.failed_stage for r in results if not r.success and r.failure_kind != INTERNAL_ERROR)
+    failed = [r for r in results if not r.success and r.failure_kind != INTERNAL_ERROR]  # the cell's failures
     no_grasp = sum(r.failure_kind == NoDemoLikeGrasp.kind for r in results)
     bugs = sum(r.failure_kind == INTERNAL_ERROR for r in results)
     possible = len(results) - no_grasp
@@ -49,9 +49,8 @@ def summarise(name: str, results: list[JobResult]) -> dict:
         out[f"{name}_second_look_used"] = sum(bool(k.get("used")) for k in looked)
         out[f"{name}_second_look_moved_place"] = sum(_moved_place(k) for k in looked)
         out[f"{name}_picked_before_a_place"] = sum(bool(k.get("pick_only")) for k in looked)
-    out[f"{name}_failures"] = dict(sorted(failures.items())) or "none"
-    out[f"{name}_failure_kinds"] = dict(sorted(Counter(r.failure_kind for r in results if not r.success
-                                                       and r.failure_kind != INTERNAL_ERROR).items())) or "none"
+    out[f"{name}_failures"] = dict(sorted(Counter(r.failed_stage for r in failed).items())) or "none"
+    out[f"{name}_failure_kinds"] = dict(sorted(Counter(r.failure_kind for r in failed).items())) or "none"
     out[f"{name}_internal_errors"] = bugs  # bugs of ours, not failures of the cell: counted apart
     return out
 

@@ -13,7 +13,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     from app.console.options import add_imitation_arguments
     from app.predict.methods import choices
 
-    p.add_argument("--method", default="nift", choices=choices(true_poses=False), help="method to measure (default nift)")
+    p.add_argument("--method", default="nift", choices=choices(true_poses=False),
+                   help="method to measure (default nift)")
     p.add_argument("--objects", type=int, default=20, help="test objects per task (default 20)")
     p.add_argument("--tasks", default="mug,bowl,bottle", help="comma list of tasks")
     p.add_argument("--quick", action="store_true", help="two objects per task (CI size)")

@@ -15,7 +15,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
     p.add_argument("--task", required=True, choices=["mug", "bowl", "bottle"], help="which task's demos to imitate")
     p.add_argument("--cloud", type=Path, required=True, help="object cloud in the base frame (.ply .pcd .xyz .npy)")
-    p.add_argument("--method", default="nift", choices=choices(true_poses=False), help="nift (= ibs-nif), a query-feature baseline, or cpd")
+    p.add_argument("--method", default="nift", choices=choices(true_poses=False),
+                   help="nift (= ibs-nif), a query-feature baseline, or cpd")
     p.add_argument("--demos", type=Path, help="task directory (default demos/<task>)")
     p.add_argument("--seed", type=int, default=0, help="initial rotations and translations")
     add_imitation_arguments(p)

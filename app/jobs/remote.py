@@ -103,9 +103,10 @@ def run_remote_series(cell: NetCell, layout: CellLayout, t: Task, seeds: list[in
     try:
         for seed in seeds:
             info = cell.rig_run("prepare", t.name, seed, pose)
+            oracle = _oracle(cell) if method_record(config.method).true_poses else None
             try:
                 result = run_job(t, cell.arm, cell.gripper, cell.camera, T_base_cam, layout.fixture_pose(t.fixture),
-                                 scene, config, RigHooks(cell), _oracle(cell) if method_record(config.method).true_poses else None)
+                                 scene, config, RigHooks(cell), oracle)
             finally:
                 cell.rig_run("clear")
             result.info = {**info, "devices": "net"}

@@ -16,7 +16,7 @@ from hardware.settings import check_integers, check_ranges
 @dataclass(frozen=True)
 class JobConfig:
     """How a job runs: what it predicts with (`predict`), the grip, and the settings of perception and
-    motion; a TOML file's `[job]` table (`configs/job.toml`)."""
+    motion; a job file (`configs/job.toml`, `--job-config`)."""
 
     predict: PredictConfig = PredictConfig()
     grasp_force: float = 40.0  # N

@@ -37,7 +37,8 @@ def continued_ik(kin: UR5Kinematics, T0: np.ndarray, T1: np.ndarray, s0: float, 
 def line_path(kin: UR5Kinematics, T0: np.ndarray, T1: np.ndarray, q0: np.ndarray, scene: PlanningScene | None = None,
               ignore: tuple[str, ...] = (), what: str = "line") -> np.ndarray:
     """Joint positions (K, 6) tracing the TCP from T0 (at q0) to T1 on a straight line, each the
-    closed-form branch nearest the previous; NoIKSolution if IK fails or flips on the way, PathCollides where it collides."""
+    closed-form branch nearest the previous; NoIKSolution if IK fails or flips on the way, PathCollides
+    where it collides."""
     n = max(2, int(np.ceil(line_length(T0, T1) / STEP)) + 1)
     path = [np.asarray(q0, float)]
     for i in range(1, n):

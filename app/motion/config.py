@@ -12,7 +12,7 @@ from hardware.settings import check_integers, check_ranges
 
 @dataclass(frozen=True)
 class MotionConfig:
-    """Distances, speeds and tolerances of a pick-and-place motion (TOML table `[job.motion]`)."""
+    """Distances, speeds and tolerances of a pick-and-place motion (table `[motion]` of a job file)."""
 
     approach_distance: float = 0.10  # m, pre-grasp back along the tool's approach (z) axis
     shorter: tuple[float, ...] = (0.6, 0.4)  # fractions of the approach and the lift tried when a line fails
@@ -46,7 +46,8 @@ class MotionConfig:
 
 
 RANGES = (("approach_distance", 0.0, 0.5, "m", False), ("approach_cone", 0.0, 90.0, "degrees", True),
-          ("lift_height", 0.0, 0.5, "m", False), ("peg_clearance", 0.0, 0.1, "m", True), ("peg_short", 0.0, 0.2, "m", True),
+          ("lift_height", 0.0, 0.5, "m", False), ("peg_clearance", 0.0, 0.1, "m", True),
+          ("peg_short", 0.0, 0.2, "m", True),
           ("retreat_distance", 0.0, 0.5, "m", False), ("carry_pivot", 0.0, 180.0, "degrees", True),
           ("pivot_lever", 0.0, 1.0, "m", True), ("short_lever_search", 1, 1_000_000, "states", True),
           ("joint_speed", 0.0, 3.15, "rad/s", False), ("joint_acceleration", 0.0, 40.0, "rad/s^2", False),

@@ -4,7 +4,8 @@ A mug hangs by its handle on the rack's peg, which rises at 45 degrees; the plac
 the hang from `place_distances[0]` out along the peg. The planning scene cannot check the carried
 object on that line - the hull of its cloud fills the handle, so it always overlaps the peg. The
 oracle's hangs have the handle resting in the peg (4-7 of the mesh's vertices inside it); slid
-along the peg so, the handle drags on it and turns the mug in the grasp, pushing the fingers apart. So the object is placed `clearance` above its
+along the peg so, the handle drags on it and turns the mug in the grasp, pushing the fingers apart.
+So the object is placed `clearance` above its
 hang (`above_peg`), and the peg is what must pass through the handle: the object's points at the
 place, moved back along a direction d by s in (0, L],
 

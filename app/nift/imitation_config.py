@@ -55,7 +55,7 @@ class ImitationConfig:
     place_demo_match: str = "mean"
     # Candidates (our addition, `app.nift.candidates`): the result ranks the distinct poses within a
     # margin; `diverse` pruning keeps one pose of each basin before a second one of the same - off
-    # here, so the teleported tables stay as measured, on in the cell's schedule (app.jobs.job.CELL_IMITATION).
+    # here, so the teleported tables stay as measured, on in the cell's schedule (app.predict.config.CELL_IMITATION).
     diverse: bool = False
     # Grasp starts (our addition, `app.predict.grasp_starts`): also start the grasp's imitation from every
     # demo's grasp relative to the top of its cloud, turned about the vertical this many times (0 = off,

@@ -4,7 +4,8 @@ place's imitation says the fixture is.
 Grasp and place are imitated separately (paper Sec. III-C). On one Kinect view a mug's rim looks the
 same all round, so the grasp imitation picks a rim point at any azimuth, while in every demo the
 gripper held the rim at one side of the handle: hung on the peg with the grasp found, the gripper
-then sat 6-10 cm from where any demo's was, inside the rack's post (docs/decisions.md). The place's imitation, which does use the handle,
+then sat 6-10 cm from where any demo's was, inside the rack's post (docs/decisions.md). The place's
+imitation, which does use the handle,
 says where the fixture would be relative to the object, T_base_fixture_seen; each demo d held the
 object with the TCP at C_d = inv(T_base_fixture_d) @ T_base_tcp_d relative to its fixture. So
 

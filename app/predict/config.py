@@ -20,7 +20,7 @@ CELL_IMITATION = ImitationConfig(prune_every=10, explore_points=128, refine_poin
 
 @dataclass(frozen=True)
 class PredictConfig:
-    """What `app.predict.predict.predict` does with a cloud (TOML table `[job.predict]` of a job file)."""
+    """What `app.predict.predict.predict` does with a cloud (table `[predict]` of a job file)."""
 
     method: str = "nift"  # a name or alias of `app.predict.methods`
     demos: Path | None = None  # the task's demo directory (default demos/<task>)

@@ -28,7 +28,6 @@ class Method:
     aliases: tuple[str, ...] = ()
     query: str | None = None  # template methods: the query points (ibs, bps)
     feature: str | None = None  # template methods: the feature field (nif, scf, ndf)
-    summary: str = ""
 
     @property
     def template(self) -> bool:
@@ -46,16 +45,15 @@ class Method:
 
 
 def _template(query: str, feature: str, aliases: tuple[str, ...] = ()) -> Method:
-    return Method(f"{query}-{feature}", Family.TEMPLATE, aliases, query, feature,
-                  f"{query.upper()} query points, {feature.upper()} features")
+    return Method(f"{query}-{feature}", Family.TEMPLATE, aliases, query, feature)
 
 
 ORACLE = "oracle"
 REGISTRY: tuple[Method, ...] = (
     *(_template(q, f, ("nift",) if (q, f) == ("ibs", "nif") else ()) for q in ("bps", "ibs")
       for f in ("ndf", "scf", "nif")),
-    Method("cpd", Family.REGISTRATION, summary="the demo whose cloud registers best (coherent point drift)"),
-    Method(ORACLE, Family.ORACLE, ("teacher",), summary="the scripted poses from the simulator's true object pose"),
+    Method("cpd", Family.REGISTRATION),  # the demo whose cloud registers best (coherent point drift)
+    Method(ORACLE, Family.ORACLE, ("teacher",)),  # the scripted poses at the simulator's true object pose
 )
 _BY_NAME = {n: m for m in REGISTRY for n in m.names}
 

@@ -283,7 +283,8 @@ class SimArm(StopState, Arm):
                 return self._halt(f"protective stop: {force:.0f} N contact on the arm", protective=True)
             if self._detecting and (change := self._force_change()) is not None:
                 self._contact_detected = True
-                return self._halt(f"contact detected: the force on the tool changed by {change:.0f} N", protective=False)
+                return self._halt(f"contact detected: the force on the tool changed by {change:.0f} N",
+                                  protective=False)
         return True
 
     def _force_change(self) -> float | None:

@@ -85,7 +85,8 @@ class SimGripper(Gripper):
         refreshes their depth along the normal each was found with. A point kept with its normal
         reversed (a pad pressed into a thin rim's convex parts) holds the object to the pad: opening
         fingers dragged the oracle's bowls 2 cm along and the retreat carried them off the shelf
-        (docs/journal/jobs-2026-11-to-12-05.md, "Objects dragged off the shelf on the release"). Switching the touched pairs'
+        (docs/journal/jobs-2026-11-to-12-05.md, "Objects dragged off the shelf on the release").
+        Switching the touched pairs'
         collisions off for one step empties their manifolds; nothing is pressed that step, as the
         fingers are letting go. No contact, no step: an open gripper's opening is unchanged."""
         r = self.robot
