@@ -34,7 +34,7 @@ def alive(pid: int) -> bool:
 def workers_left_after_a_kill(hook: str) -> tuple[list[int], list[int]]:
     """Start a parent whose pool's workers run `hook` first, SIGKILL it: (its workers, those alive 3 s on)."""
     parent = subprocess.Popen([sys.executable, "-c", PARENT.format(hook=hook)], cwd=ROOT, stdout=subprocess.PIPE,
-                              text=True)
+                              stderr=subprocess.DEVNULL, text=True)  # its resource tracker's notes on the kill
     workers = [int(p) for p in parent.stdout.readline().split()]
     parent.send_signal(signal.SIGKILL)
     parent.wait()
