@@ -96,7 +96,7 @@ def test_import_round_trips_through_the_library_and_a_failure_writes_nothing(imp
         import_object(path, "mug", "scan-mug", up="y", directory=tmp_path)
     sheet = tmp_path / "sheet.stl"
     trimesh.Trimesh([[0, 0, 0], [0.1, 0, 0], [0.1, 0.1, 0]], [[0, 1, 2]]).export(sheet)
-    with pytest.raises(ValueError, match="could not repair"):
+    with pytest.raises(ValueError, match="cannot be a solid object"):
         import_object(sheet, "mug", "sheet", directory=tmp_path)
     assert object_names(tmp_path) == ["scan-mug"]
     assert sorted(p.name for p in tmp_path.iterdir()) == ["scan-mug", "sheet.stl"]

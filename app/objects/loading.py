@@ -2,8 +2,8 @@
 
 A scan arrives with texture seams (the same point stored once per UV island, so the surface looks
 open along every seam), small holes, arbitrary units and its own "up". `prepare_mesh` merges the
-seam vertices (trimesh), fills what is still open (trimesh, then MeshFix through pymeshfix when
-that is not enough), scales to metres (from `units`, or the size when that is unambiguous), turns
+seam vertices (trimesh), makes one solid of what is left (`app.objects.mesh_repair`: holes filled,
+open ends capped, slivers and islands dropped, overlapping parts united), scales to metres (from `units`, or the size when that is unambiguous), turns
 the file's up axis to +z and puts the object on z = 0 with the centre of its footprint (the
 lowest slice's convex hull, so a mug's handle does not pull its axis off z) on the z axis.
 Every step that changed something is reported in `notes`.
@@ -16,12 +16,12 @@ from pathlib import Path
 import numpy as np
 import trimesh
 
+from app.objects.mesh_repair import NotASolid, solidify
+
 FORMATS = (".obj", ".stl", ".ply", ".glb", ".gltf", ".off")
 UNITS = {"m": 1.0, "cm": 0.01, "mm": 0.001, "in": 0.0254}
 UP_AXES = ("z", "y", "x", "-z", "-y", "-x")
 SIZE_RANGE = (0.02, 0.6)  # m: the largest extent a graspable object can have in this cell
-KEPT_VOLUME = 0.05  # MeshFix keeps the largest component: less than this share of the hull is a failure
-KEPT_EXTENT = 0.9  # nor may the repair shrink the object along an axis by more than this share
 FOOTPRINT = 0.005  # m (after scaling): the slice above the lowest point whose hull is the footprint
 
 
@@ -59,7 +59,8 @@ def open_edges(mesh: trimesh.Trimesh) -> int:
 
 
 def repair(mesh: trimesh.Trimesh, name: str = "mesh") -> tuple[trimesh.Trimesh, list[str]]:
-    """A watertight, outward-facing copy and the steps taken; a one-line error if it cannot be closed."""
+    """A watertight, outward-facing solid and the steps taken (`app.objects.mesh_repair.solidify` for
+    several pieces, open ends, overlaps and fans); a one-line NotASolid when nothing encloses a volume."""
     notes: list[str] = []
     out = trimesh.Trimesh(np.asarray(mesh.vertices, float), np.asarray(mesh.faces), process=False)
     before, open_before = len(out.vertices), open_edges(out)
@@ -70,34 +71,22 @@ def repair(mesh: trimesh.Trimesh, name: str = "mesh") -> tuple[trimesh.Trimesh, 
     if len(out.vertices) < before:
         notes.append(f"merged {before - len(out.vertices)} duplicated vertices (texture seams); "
                      f"open edges {open_before} -> {open_edges(out)}")
-    if not out.is_watertight:
-        holes = open_edges(out)
-        trimesh.repair.fill_holes(out)
-        if out.is_watertight:
-            notes.append(f"filled holes bounded by {holes} open edges (trimesh)")
-    if not out.is_watertight:
-        out = _meshfix(out, name)
-        notes.append("closed the surface with MeshFix (pymeshfix)")
+    if not len(out.faces):
+        raise NotASolid(f"{name}: every triangle is degenerate; it cannot be a solid object")
+    if out.is_watertight and shared_edges(out) == 0 and out.body_count == 1:
+        consistent = out.is_winding_consistent
+        trimesh.repair.fix_normals(out)
+        if out.volume > 0:
+            if not consistent:
+                notes.append("re-wound the faces that pointed inwards, so every normal faces out (trimesh)")
+            return out, notes
+    if not out.is_winding_consistent or out.body_count > 1 or not out.is_watertight:
+        out, more = solidify(out, name)
+        notes += more
     trimesh.repair.fix_normals(out)
     if out.volume <= 0:
-        raise ValueError(f"{name}: the repaired surface encloses no volume")
+        raise NotASolid(f"{name}: the repaired surface encloses no volume; it cannot be a solid object")
     return out, notes
-
-
-def _meshfix(mesh: trimesh.Trimesh, name: str) -> trimesh.Trimesh:
-    """MeshFix's repair (holes, self-intersections, non-manifold parts), or a one-line error."""
-    from pymeshfix import MeshFix
-
-    fix = MeshFix(np.asarray(mesh.vertices, float), np.asarray(mesh.faces, np.int32))
-    fix.repair(remove_smallest_components=False)
-    points, faces = np.asarray(fix.points), np.asarray(fix.faces)
-    out = trimesh.Trimesh(points, faces, process=True) if len(faces) else None
-    kept = out is not None and out.is_watertight and out.volume >= KEPT_VOLUME * abs(mesh.convex_hull.volume)
-    if not kept or (out.extents < KEPT_EXTENT * mesh.extents).any():  # MeshFix dropped a part of it
-        raise ValueError(f"{name}: not a closed manifold surface ({open_edges(mesh)} open edges, "
-                         f"{shared_edges(mesh)} edges shared by more than two faces) and MeshFix could not "
-                         f"repair it; close it in a mesh editor")
-    return out
 
 
 def shared_edges(mesh: trimesh.Trimesh) -> int:
