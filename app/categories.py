@@ -6,3 +6,4 @@ IN_DOMAIN: tuple[str, ...] = ("mug", "bowl", "bottle")  # vases stay out of trai
 # (the paper's teleported protocol); resting: dropped from a Haar-random rotation, settled on the table
 POSES: tuple[str, ...] = ("upright", "arbitrary", "resting")
 REVOLUTION: tuple[str, ...] = ("bowl", "bottle", "vase")  # bodies of revolution about z: a grasp turned about it is the same grasp
+SPLIT_NAMES: tuple[str, ...] = ("train", "test", "wide-train", "wide-test")  # seed splits (app.objects.families)

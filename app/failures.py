@@ -16,7 +16,8 @@
     |  |- ContactStop                contact detection stopped a guarded motion where no contact may be
     |  |- MotionStopped              any other stop, or a motion that ended off its target
     |  `- ReleaseJammed              the fingers did not open off the object
-    |- GraspMissed                   the gripper holds nothing after closing, the lift, the look or the carry
+    |- GraspMissed                   the gripper holds nothing after closing, or met the object on the way in
+    |  `- GraspSlipped               it held the object after closing and lost it in the lift, the look or the carry
     |- PlaceMissed                   the camera sees nothing new where the object was sent: it fell
     `- PlaceFailed                   the cell's verdict on the place is no
 
@@ -104,6 +105,12 @@ class ReleaseJammed(ExecutionFailure):
 
 class GraspMissed(CellFailure):
     kind = "grasp_missed"
+
+
+class GraspSlipped(GraspMissed):
+    """The object was held after closing and slid out later: the next grasp keeps away from this one."""
+
+    kind = "grasp_slipped"
 
 
 class PlaceMissed(CellFailure):

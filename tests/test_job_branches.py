@@ -176,7 +176,7 @@ def test_an_object_that_slips_out_is_looked_for_again_and_picked_again(cell, sce
 def test_the_last_attempt_s_slip_ends_the_job_as_a_missed_grasp(cell, scene):
     after_close(cell, 1)
     result = run(cell, scene, predictor_of(grasp()), JobConfig(attempts=1))
-    assert not result.success and result.failed_stage == "lift" and result.failure_kind == "grasp_missed"
+    assert not result.success and result.failed_stage == "lift" and result.failure_kind == "grasp_slipped"
     assert result.reason.endswith("(attempt 1 of 1)") and cell.arm.stops == 1
 
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from app.categories import SPLIT_NAMES
 from app.console.output import print_figures
 
 NAME = "make-data"
@@ -13,7 +14,8 @@ QUICK = {"instances": 3, "views": 2, "queries": 300, "shard_instances": 3}
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--out", type=Path, required=True, help="data directory (resumes if it holds a manifest)")
-    p.add_argument("--split", default="train", choices=["train", "test"], help="instance seeds to draw from")
+    p.add_argument("--split", default="train", choices=SPLIT_NAMES,
+                   help="instance seeds to draw from (wide-train: every family not held out; docs/objects.md)")
     p.add_argument("--categories", default="mug,bowl,bottle", help="comma list (vase stays out of training)")
     p.add_argument("--instances", type=int, default=500, help="instances per category (default 500)")
     p.add_argument("--views", type=int, default=8, help="samples (scale, pose, camera view) per instance")

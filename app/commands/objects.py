@@ -8,6 +8,8 @@ from pathlib import Path
 
 import numpy as np
 
+from app.categories import SPLIT_NAMES
+
 NAME = "objects"
 HELP = "render a contact sheet of procedural object instances; import your own meshes (objects import)"
 
@@ -31,7 +33,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     actions.add_parser("list", help="list the objects in the local object library ($NIFT_OBJECTS)")
     p.add_argument("--category", default="mug", choices=CATEGORIES, help="object category (default: mug)")
     p.add_argument("--count", type=int, default=16, help="number of instances (default: 16)")
-    p.add_argument("--split", default="test", choices=["train", "test"], help="seed split to draw from")
+    p.add_argument("--split", default="test", choices=SPLIT_NAMES, help="seed split to draw from")
     p.add_argument("--seed", type=int, default=0, help="picks which instances of the split are drawn")
     p.add_argument("--out", type=Path, default=Path("objects.png"), help="contact sheet PNG path")
     p.add_argument("--export", type=Path, metavar="DIR", help="also write each instance as DIR/<name>.obj")

@@ -29,13 +29,15 @@ from dataclasses import replace
 import numpy as np
 
 from app.categories import REVOLUTION
-from app.failures import INTERNAL_ERROR, CellFailure, GraspMissed, NoCandidate, PlaceFailed, PlaceMissed, ReleaseJammed
+from app.failures import (INTERNAL_ERROR, CellFailure, GraspMissed, GraspSlipped, NoCandidate, PlaceFailed, PlaceMissed,
+                          ReleaseJammed)
 from app.jobs.check import sighting
 from app.jobs.choice import choose, describe
 from app.jobs.clearance import gripper_clear
 from app.jobs.context import JobContext, Placer, Predictor
 from app.jobs.guarded import guarded_leave, guarded_line, guarded_place
 from app.jobs.held_place import look_and_place
+from app.jobs.hold import holding, on_object
 from app.jobs.record import STAGES, JobHooks, JobResult, check_held, ur
 from app.jobs.settings import JobConfig, looks_again
 from app.motion.executor import back_to_start, execute, motion_failure
@@ -114,14 +116,14 @@ def run_job(t: Task, arm: Arm, gripper: Gripper, camera: DepthCamera, T_base_cam
 
 def _run(job: JobContext) -> None:
     planner = Planner(job.kin, job.arm.joint_limits, job.scene, job.config.motion)
-    options, seen = None, None
+    options, seen, slips = None, None, []
     for attempt in range(1, job.config.attempts + 1):
         last = attempt == job.config.attempts
         cloud = _observe(job)
         if options is None or np.linalg.norm(cloud.mean(axis=0) - seen) > MOVED:
             options = _imitate(job, cloud)
         seen = cloud.mean(axis=0)
-        pick, chosen = _plan(job, planner, options, cloud)
+        pick, chosen = _plan(job, planner, _holding(job, options, slips), cloud)
         plan, sent = pick, transform_points(chosen.motion, cloud)  # sent: where the object should end
         try:
             _pick(job, pick, planner)
@@ -132,6 +134,8 @@ def _run(job: JobContext) -> None:
             job.result.attempts.append({"attempt": attempt, **describe(chosen, str(miss))})
             if last:
                 raise type(miss)(f"{miss} (attempt {attempt} of {attempt})") from None
+            if isinstance(miss, GraspSlipped):
+                slips.append(on_object(chosen.T_base_tcp[:3, 3], job.points))
             _recover(job, planner, pick)
             options = [c for c in options if c.grasp_rank != chosen.grasp_rank] or None  # none left: imitate again
             continue
@@ -161,6 +165,19 @@ def _observe(job: JobContext) -> np.ndarray:
         cloud = resample(job.points, cfg.n_points, cfg.seed)
         job.scene.add_cloud(OBJECT, cloud, eye=job.T_base_cam[:3, 3])
     return cloud
+
+
+def _holding(job: JobContext, options: list, slips: list[np.ndarray]) -> list:
+    """The options whose grasps will hold on what the camera saw, none near a grasp that slipped
+    (`app.jobs.hold`); the record says why each other one was ruled out."""
+    if not job.config.hold.check:
+        return options
+    kept, ruled = holding(options, job.points, job.T_base_cam[:3, 3], job.config.hold, slips)
+    job.result.candidates += ruled
+    if not kept:
+        with job.stage("plan"):
+            raise NoCandidate(f"every one of {len(ruled)} candidates lies near a grasp that slipped", ruled)
+    return kept
 
 
 def _imitate(job: JobContext, cloud: np.ndarray) -> list:

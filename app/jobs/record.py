@@ -7,7 +7,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from app.failures import GraspMissed
+from app.failures import GraspSlipped
 from hardware.interfaces import Gripper
 from hardware.se3 import pose_to_ur
 
@@ -31,9 +31,9 @@ class JobHooks:
 
 
 def check_held(gripper: Gripper, during: str) -> None:
-    """GraspMissed when the gripper no longer holds the object after the motion `during`."""
+    """GraspSlipped when the gripper no longer holds the object after the motion `during`."""
     if not gripper.object_detected:
-        raise GraspMissed(f"object dropped during the {during} (gripper width {1000 * gripper.width:.1f} mm)")
+        raise GraspSlipped(f"object dropped during the {during} (gripper width {1000 * gripper.width:.1f} mm)")
 
 
 @dataclass

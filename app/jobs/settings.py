@@ -8,6 +8,7 @@ from app.motion.config import MotionConfig
 from app.objects import fixture
 from app.perception import PerceptionConfig
 from app.predict.config import PredictConfig
+from app.predict.grasp_hold import HoldConfig
 from app.predict.methods import method as method_record
 from app.tasks.task import Task
 from hardware.settings import check_integers, check_ranges
@@ -36,6 +37,7 @@ class JobConfig:
     # the search beside it (app.jobs.guarded)
     leave_contact_force: float = 30.0  # N of change that stops a predicted hang's way out: the fingers met the mug
     # they let go (it swings onto the peg); they open fully and the arm carries on (app.jobs.guarded.guarded_leave)
+    hold: HoldConfig = HoldConfig()  # whether a grasp will hold, judged on the cloud before the plan (app.jobs.hold)
     attempts: int = 3  # grasps tried before the job gives up
     most_plans: int = 6  # full plans tried per attempt before the plan stage gives up
     threads: int = 1  # torch threads: two threads beside one busy process took 2.5x as long as one (docs/jobs.md)

@@ -1,4 +1,5 @@
-"""The category catalogue: `generate(category, seed)`, train/test seed splits, semantics lookup."""
+"""The category catalogue: `generate(category, seed)`, seed splits and families (`app.objects.families`),
+semantics lookup."""
 from __future__ import annotations
 
 import zlib
@@ -10,19 +11,15 @@ import trimesh
 
 from app.categories import CATEGORIES, IN_DOMAIN  # noqa: F401 (IN_DOMAIN: re-exported by app.objects)
 from app.objects import bottle, bowl, mug, vase
+from app.objects.families import SPLITS, TEST_SEEDS, TRAIN_SEEDS, family_of  # noqa: F401 (seed ranges: re-exported)
 from app.objects.semantics import Semantics
 
-Builder = Callable[[int, np.random.Generator], tuple[trimesh.Trimesh, Semantics]]
+Builder = Callable[[int, np.random.Generator, str], tuple[trimesh.Trimesh, Semantics]]  # seed, rng, family
 BUILDERS: dict[str, Builder] = {"mug": mug.build, "bowl": bowl.build, "bottle": bottle.build, "vase": vase.build}
 RANGES: dict[str, dict[str, tuple[float, float]]] = {
     "mug": mug.RANGES, "bowl": bowl.RANGES, "bottle": bottle.RANGES, "vase": vase.RANGES,
 }
 assert tuple(BUILDERS) == CATEGORIES, "app/categories.py lists the categories BUILDERS builds"
-
-# Seed splits: disjoint integer ranges, the same for every category.
-TRAIN_SEEDS = range(0, 5000)
-TEST_SEEDS = range(100_000, 100_200)
-SPLITS = {"train": TRAIN_SEEDS, "test": TEST_SEEDS}
 
 
 def check_category(category: str) -> str:
@@ -33,10 +30,10 @@ def check_category(category: str) -> str:
 
 
 def split(category: str, part: str) -> list[int]:
-    """Seeds of the 'train' or 'test' instances of a category (the two lists never overlap)."""
+    """Seeds of a split's instances of a category (`app.objects.families`: the splits never overlap)."""
     check_category(category)
     if part not in SPLITS:
-        raise ValueError(f"unknown split {part!r}; choose 'train' or 'test'")
+        raise ValueError(f"unknown split {part!r}; choose one of {', '.join(SPLITS)}")
     return list(SPLITS[part])
 
 
@@ -47,7 +44,7 @@ def _rng(category: str, seed: int) -> np.random.Generator:
 
 @lru_cache(maxsize=256)
 def _build(category: str, seed: int) -> tuple[trimesh.Trimesh, Semantics]:
-    return BUILDERS[category](seed, _rng(category, seed))
+    return BUILDERS[category](seed, _rng(category, seed), family_of(category, seed))
 
 
 def generate(category: str, seed: int) -> trimesh.Trimesh:
@@ -62,6 +59,7 @@ def generate(category: str, seed: int) -> trimesh.Trimesh:
     out = mesh.copy()
     out.metadata["semantics"] = sem
     out.metadata["name"] = f"{category}-{seed}"
+    out.metadata["family"] = family_of(category, int(seed))
     return out
 
 

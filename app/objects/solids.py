@@ -21,9 +21,12 @@ def revolve(profile_rz: np.ndarray, segments: int = SEGMENTS) -> Manifold:
     return Manifold.revolve(section, circular_segments=segments)
 
 
-def tube(path: np.ndarray, radius: float, segments: int = 24) -> Manifold:
-    """A round tube along a 3-D polyline: union of the convex hulls of consecutive ball pairs."""
-    balls = [Manifold.sphere(radius, segments).translate(tuple(p)) for p in np.asarray(path, float)]
+def tube(path: np.ndarray, radius: float, segments: int = 24,
+         squash: tuple[float, float, float] = (1.0, 1.0, 1.0)) -> Manifold:
+    """A tube along a 3-D polyline: union of the convex hulls of consecutive ball pairs; `squash`
+    scales the balls along x, y, z (a flat strap in the x-z plane: thin in x and z, wide in y)."""
+    ball = Manifold.sphere(radius, segments).scale(tuple(squash))
+    balls = [ball.translate(tuple(p)) for p in np.asarray(path, float)]
     links = [Manifold.batch_hull([a, b]) for a, b in zip(balls[:-1], balls[1:])]
     return Manifold.batch_boolean(links, OpType.Add)
 

@@ -44,8 +44,8 @@ RANGES = {
 HANDLE_COUNTS, HANDLE_PROBS = (0, 1, 2), (0.6, 0.25, 0.15)
 
 
-def build(seed: int, rng: np.random.Generator) -> tuple[trimesh.Trimesh, Semantics]:
-    """One vase and its semantics."""
+def build(seed: int, rng: np.random.Generator, family: str = "classic") -> tuple[trimesh.Trimesh, Semantics]:
+    """One vase and its semantics (one family: `family` is accepted for the catalogue's sake)."""
     p = sample_params(RANGES, rng)
     p["handles"] = float(rng.choice(HANDLE_COUNTS, p=HANDLE_PROBS))
     H = p["height"]

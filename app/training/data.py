@@ -34,6 +34,7 @@ from app.io_utils import write_json, write_npz
 from app.nift.raycast import scene_of
 from app.nift.scf import compute_scf
 from app.objects import IN_DOMAIN, check_category, generate, split
+from app.objects.families import family_of
 from app.training.manifest import FORMAT, read_manifest
 from app.training.views import CAMERAS, observe
 from app.workers import die_with_parent
@@ -141,6 +142,7 @@ def make_shard(cfg: DataConfig, index: int, instances: list[tuple[str, int]], ou
     }
     path = write_npz(out / shard_name(index), arrays)
     return {"file": path.name, "instances": len(instances), "samples": len(instances) * cfg.views,
+            "families": sorted({f"{c}/{family_of(c, s)}" for c, s in instances}),
             "bytes": path.stat().st_size, "seconds": round(time.perf_counter() - start, 3)}
 
 

@@ -1,0 +1,145 @@
+"""Will a grasp hold? Judged from the cell's own cloud before the grasp is chosen (our addition).
+
+A parallel gripper holds by friction at its two pad contacts. In the TCP frame (x along the finger
+width, y the closing axis, z the approach) the pads meet the outermost surface on each side of what
+lies between them. For each side s = +1, -1 take the swept points (`grasp_centering.swept_points`);
+along each of the pad's axes (x, z) bin them, keep per bin the outermost s*y (the ridge the pad
+meets first) and fit a line to the bins within `patch_depth` of the outermost, giving the slopes
+b_x, b_z of the surface under the pad:
+
+    outward normal  n_s = (-b_x, s, -b_z) / |(-b_x, s, -b_z)|
+
+Two tests, each from Coulomb friction with coefficient mu between pad and object:
+
+- antipodal: each contact normal lies within the friction cone about the closing axis,
+      angle(n_s, s*y) = atan(sqrt(b_x^2 + b_z^2)) <= atan(mu);
+- taper: with u the direction against gravity projected into the pad plane (unit; skipped when
+  gravity runs along the closing axis), the surface under a pad that narrows towards the top tilts
+  its normal upwards by beta = asin(n_s . u); the squeeze then pushes the object down, out of the
+  fingers, and gravity helps it: the grasp slides out when the wedge's half-angle, beta averaged over
+  the sides seen, exceeds `max_taper_deg` (a cap that narrows towards the top and has no lip). Coulomb
+  alone would allow nearly atan(mu); the limit is lower because a flat pad meets a taper along one
+  line at its lower edge, which resists no turn of a tall object in the lift and the carry: the limit
+  is measured in the simulated cell (docs/grasp-hold.md). A grip thinner than `min_width` (a rim's
+  wall) is not a wedge and is not judged for taper.
+
+Too few points to judge leaves the grasp unjudged (`holds` None): a single view often hides one side.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from app.predict.grasp_centering import swept_points
+from hardware.gripper_geometry import GripperGeometry
+
+UP = np.array([0.0, 0.0, 1.0])  # against gravity, in the base frame
+
+
+@dataclass(frozen=True)
+class HoldConfig:
+    """How a grasp's hold is judged."""
+
+    check: bool = True  # judge grasps before the plan (false: every grasp is tried as imitation ranks it)
+    friction: float = 0.6  # pad-object Coulomb coefficient assumed (rubber pads on plastic or glass)
+    max_taper_deg: float = 15.0  # a steeper narrowing towards the top slides out: in the simulated cell caps
+    # judged at 21-31 deg slipped in a lift, none judged at 13 deg (docs/grasp-hold.md)
+    cell: float = 0.003  # m: bins along each of the pad's axes
+    patch_depth: float = 0.004  # m: bins of the ridge this close to the outermost one are the pad's patch
+    min_cells: int = 4  # fewer points on a side: that side is not judged
+    seen_side: float = -0.3  # a side whose pad faces away from the camera beyond this cosine is hidden
+    min_width: float = 0.012  # m between the outermost points: a thinner grip (a rim's wall) is no wedge
+    moves: tuple[float, ...] = (0.01, 0.02, 0.03)  # m: a grasp that would slide out is tried this far down
+    slip_away: float = 0.03  # m: after a slip, grasps this close to the slipped one are not tried again
+    min_gravity: float = 0.3  # |u| below this: gravity runs along the closing axis, no taper to judge
+
+
+@dataclass(frozen=True)
+class Hold:
+    """The judgement of one grasp: holds (None: not judged), the worst contact's tilts, and why."""
+
+    holds: bool | None
+    taper_deg: float | None = None  # the larger beta of the two sides
+    cone_deg: float | None = None  # the larger angle of a contact normal from the closing axis
+    reason: str = ""
+
+    def record(self) -> dict:
+        """JSON-ready."""
+        rounded = {k: None if v is None else round(v, 1) for k, v in (("taper_deg", self.taper_deg),
+                                                                     ("cone_deg", self.cone_deg))}
+        return {"holds": self.holds, **rounded, "reason": self.reason}
+
+
+def ridge_slope(along: np.ndarray, out: np.ndarray, config: HoldConfig) -> float | None:
+    """Slope d(out)/d(along) of the ridge - the outermost point per `cell`-wide bin of `along` - over the
+    bins within `patch_depth` of the outermost; None when fewer than two bins are there."""
+    bins = np.floor(along / config.cell).astype(int)  # (K,)
+    keys, which = np.unique(bins, return_inverse=True)
+    top = np.full(len(keys), -np.inf)
+    np.maximum.at(top, which.ravel(), out)  # (B,) the ridge
+    patch = top >= top.max() - config.patch_depth
+    if patch.sum() < 2:
+        return None
+    return float(np.polyfit((keys[patch] + 0.5) * config.cell, top[patch], 1)[0])
+
+
+def side_normal(points: np.ndarray, side: int, config: HoldConfig) -> np.ndarray | None:
+    """Outward normal (3,), TCP frame, of the patch the pad on `side` (+1: +y, -1: -y) presses on, from
+    the slopes of the surface's outermost ridge along the pad's two axes (x, z); None when too few
+    points show it."""
+    if len(points) < config.min_cells:
+        return None
+    out = side * points[:, 1]  # (K,) how far out towards the pad
+    bx, bz = (ridge_slope(points[:, k], out, config) for k in (0, 2))
+    if bx is None and bz is None:
+        return None
+    n = np.array([-(bx or 0.0), side, -(bz or 0.0)])
+    return n / np.linalg.norm(n)
+
+
+def judge_hold(T_base_tcp: np.ndarray, cloud: np.ndarray, config: HoldConfig = HoldConfig(),
+               geometry: GripperGeometry = GripperGeometry(), up: np.ndarray = UP,
+               eye: np.ndarray | None = None) -> Hold:
+    """Whether the grasp at T_base_tcp (4, 4) will hold what the cloud (N, 3, base frame) shows between
+    the fingers (see the module's docstring); `eye`: the camera's position (3,), whose view shows only
+    the side of the object facing it (a side whose pad faces away is not judged)."""
+    p = swept_points(T_base_tcp, cloud, geometry)  # (K, 3) TCP frame
+    if len(p) < 2 * config.min_cells:
+        return Hold(None, reason="too few points between the fingers to judge the hold")
+    middle = (p[:, 1].min() + p[:, 1].max()) / 2
+    sides = (1, -1)
+    if eye is not None:
+        view = T_base_tcp[:3, :3].T @ (np.asarray(eye, float) - T_base_tcp[:3, 3])  # (3,) TCP frame
+        sides = tuple(s for s in sides if s * view[1] / np.linalg.norm(view) >= config.seen_side)
+    normals = {s: side_normal(p[s * (p[:, 1] - middle) > 0], s, config) for s in sides}
+    normals = {s: n for s, n in normals.items() if n is not None}
+    if not normals:
+        return Hold(None, reason="no pad's contact patch is seen well enough to judge the hold")
+    u = T_base_tcp[:3, :3].T @ up  # (3,) against gravity, TCP frame
+    u[1] = 0.0  # into the pad plane
+    judged = np.linalg.norm(u) >= config.min_gravity
+    u = u / max(np.linalg.norm(u), 1e-12)
+    cone = max(np.degrees(np.arccos(min(1.0, abs(n[1])))) for n in normals.values())
+    wedge = judged and np.ptp(p[:, 1]) >= config.min_width  # a thin wall is held flat, not squeezed out
+    taper = float(np.mean([np.degrees(np.arcsin(np.clip(n @ u, -1, 1))) for n in normals.values()])) if wedge else 0.0
+    limit = np.degrees(np.arctan(config.friction))
+    if cone > limit:
+        return Hold(False, taper, cone, f"the pads' contacts are not antipodal: a contact normal is {cone:.0f} deg "
+                                        f"off the closing axis, outside the {limit:.0f} deg friction cone")
+    if taper > config.max_taper_deg:
+        return Hold(False, taper, cone, f"the surface under the pads narrows towards the top by {taper:.0f} deg "
+                                        f"(more than {config.max_taper_deg:.0f}): it would slide out of the fingers")
+    return Hold(True, taper, cone, "holds: antipodal contacts, no taper that slides out")
+
+
+def moved_down(T_base_tcp: np.ndarray, distance: float, up: np.ndarray = UP) -> np.ndarray:
+    """The grasp moved `distance` m along gravity within its pad plane (its orientation kept): away from
+    a cap that narrows towards the top, towards the neck or the body under it."""
+    u = T_base_tcp[:3, :3].T @ up  # (3,) TCP frame
+    u[1] = 0.0
+    if np.linalg.norm(u) < 1e-9:
+        return T_base_tcp.copy()
+    out = T_base_tcp.copy()
+    out[:3, 3] -= distance * (T_base_tcp[:3, :3] @ (u / np.linalg.norm(u)))
+    return out
