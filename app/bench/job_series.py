@@ -55,17 +55,32 @@ def summarise(name: str, results: list[JobResult]) -> dict:
     return out
 
 
+def per_object(results: list[JobResult]) -> dict[str, str]:
+    """Successes per imported object: name -> "k/n"."""
+    tally: dict[str, list[bool]] = {}
+    for r in results:
+        tally.setdefault(r.info.get("object", "?"), []).append(r.success)
+    return {name: f"{sum(v)}/{len(v)}" for name, v in tally.items()}
+
+
 def run_jobs_benchmark(jobs: int = 20, job: JobConfig = JobConfig(), pose: str = "upright", seed: int = 0,
                        tasks: tuple[str, ...] = ("mug", "bowl", "bottle"), cell_config: CellConfig = CellConfig(),
                        calibration: Path | None = None, progress: Callable[[JobResult], None] = lambda r: None,
-                       records: Path | None = None) -> dict:
+                       records: Path | None = None, objects: dict[str, list] | None = None,
+                       split: str = "test") -> dict:
     """Run `jobs` jobs per task (seeds seed .. seed + jobs - 1) and summarise them; the camera pose
     comes from the `calibration` file (calibrating first if it is missing), or is the true one;
     `records`: every job's record, as a JSON list, written there (atomically) at the end; `job`: how each
-    job runs (its method, its second look, ...)."""
+    job runs (its method, its second look, ...); `objects`: imported objects by category, each run `jobs`
+    times (seeds seed .. seed + jobs - 1) instead of procedural ones, which come from `split`."""
     from app.simcell.calibration import ensure_calibration
 
     figures: dict = {"method": job.method, "pose": pose, "jobs_per_task": jobs}
+    if objects is not None:
+        figures = {**figures, "jobs_per_object": jobs, "objects": {c: [o.name for o in v] for c, v in objects.items()}}
+        del figures["jobs_per_task"]
+    elif split != "test":
+        figures["split"] = split
     every: list[dict] = []
     rss: list[float] = []  # MiB after each job
 
@@ -78,9 +93,15 @@ def run_jobs_benchmark(jobs: int = 20, job: JobConfig = JobConfig(), pose: str =
         scene = PlanningScene(cell_config)
         try:
             for name in tasks:
-                specs = [JobSpec(task(name), seed + i, pose) for i in range(jobs)]
+                t = task(name)
+                if objects is None:
+                    specs = [JobSpec(t, seed + i, pose, split=split) for i in range(jobs)]
+                else:
+                    specs = [JobSpec(t, seed + i, pose, o) for o in objects[t.category] for i in range(jobs)]
                 results = run_series(cell, scene, T_cam, specs, job, each)
                 figures.update(summarise(name, results))
+                if objects is not None:
+                    figures[f"{name}_per_object"] = per_object(results)
                 every += [r.record() for r in results]
         finally:
             scene.close()

@@ -17,7 +17,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
     p.add_argument("--method", choices=choices(), help="method (default nift; oracle, alias teacher: the simulator's "
                    "true poses)")
-    p.add_argument("--jobs", type=int, default=20, help="jobs per task (default 20)")
+    p.add_argument("--jobs", type=int, default=20, help="jobs per task (default 20); with --objects, per object")
+    p.add_argument("--objects", type=Path, metavar="SET", help="run on the meshes of a set file instead of procedural "
+                   "objects (e.g. shapes/real/set.toml; imported first where missing)")
+    p.add_argument("--split", default="test", choices=("test", "wide-test"),
+                   help="procedural objects' split (wide-test: every family, held-out ones included)")
     p.add_argument("--tasks", default="mug,bowl,bottle", help="comma list of tasks")
     p.add_argument("--pose", default="upright", choices=POSES, help="how the objects stand (see nift run --help)")
     p.add_argument("--quick", action="store_true", help="two jobs per task (CI size)")
@@ -44,13 +48,22 @@ def run(args: argparse.Namespace) -> int:
     job = job_config(args)
     if args.records is not None:
         writable_file(args.records, "--records")
+    objects = None
+    if args.objects is not None:
+        from app.objects.shape_set import set_objects
+
+        objects = set_objects(args.objects)
+        tasks = tuple(t for t in tasks if task(t).category in objects)
+        if not tasks:
+            raise ValueError(f"--objects {args.objects}: no object of the tasks' categories")
+    per_task = {t: jobs * len(objects[task(t).category]) if objects else jobs for t in tasks}
 
     from tqdm import tqdm
 
     from app.bench.job_series import run_jobs_benchmark
 
-    with tqdm(total=jobs * len(tasks), unit="job", desc="bench-jobs") as bar:
+    with tqdm(total=sum(per_task.values()), unit="job", desc="bench-jobs") as bar:
         figures = run_jobs_benchmark(jobs, job, args.pose, args.seed, tasks, cell_cfg, args.calibration,
-                                     lambda r: bar.update(1), args.records)
+                                     lambda r: bar.update(1), args.records, objects, args.split)
     print_figures(figures, args.json)
     return 0

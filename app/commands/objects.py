@@ -30,6 +30,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                      help="triangles the mesh is simplified to before convex decomposition (default 2000)")
     imp.add_argument("--replace", action="store_true", help="overwrite an object of the same name")
     imp.add_argument("--json", action="store_true", help="print the object's record as JSON")
+    many = actions.add_parser("import-set", help="import every mesh of a set file (e.g. shapes/real/set.toml)")
+    many.add_argument("set", type=Path, help="a TOML file of [[object]] tables (app.objects.shape_set)")
+    many.add_argument("--replace", action="store_true", help="import again the objects already in the library")
+    many.add_argument("--json", action="store_true", help="print what each import did as JSON")
     actions.add_parser("list", help="list the objects in the local object library ($NIFT_OBJECTS)")
     p.add_argument("--category", default="mug", choices=CATEGORIES, help="object category (default: mug)")
     p.add_argument("--count", type=int, default=16, help="number of instances (default: 16)")
@@ -53,6 +57,8 @@ def pick_seeds(category: str, split_name: str, count: int, seed: int) -> list[in
 def run(args: argparse.Namespace) -> int:
     if getattr(args, "action", None) == "import":
         return import_mesh(args)
+    if getattr(args, "action", None) == "import-set":
+        return import_many(args)
     if getattr(args, "action", None) == "list":
         return list_objects()
     return contact(args)
@@ -73,6 +79,22 @@ def import_mesh(args: argparse.Namespace) -> int:
     else:
         print(f"{obj.name} ({obj.category}) -> {obj.collision.parent}")
         for note in notes:
+            print(f"  {note}")
+    return 0
+
+
+def import_many(args: argparse.Namespace) -> int:
+    """`nift objects import-set`: import the set's meshes not in the library yet."""
+    from app.objects.shape_set import import_set
+
+    done = import_set(args.set, replace=args.replace)
+    if args.json:
+        print(json.dumps([{"name": e.name, "category": e.category, "imported": notes is not None,
+                           "notes": notes or []} for e, notes in done], indent=2))
+        return 0
+    for e, notes in done:
+        print(f"{e.name:20s} {e.category:7s} " + ("already in the library" if notes is None else "imported"))
+        for note in notes or []:
             print(f"  {note}")
     return 0
 

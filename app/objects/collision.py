@@ -47,10 +47,14 @@ def _key(mesh: trimesh.Trimesh, config: DecompositionConfig) -> str:
     return h.hexdigest()[:20]
 
 
-def decompose(mesh: trimesh.Trimesh, config: DecompositionConfig = DecompositionConfig()) -> list[trimesh.Trimesh]:
+DECOMPOSE_TIMEOUT = 600.0  # s: CoACD longer than this is stopped (the slowest of our objects takes about 60 s)
+
+
+def decompose(mesh: trimesh.Trimesh, config: DecompositionConfig = DecompositionConfig(),
+              timeout: float = DECOMPOSE_TIMEOUT) -> list[trimesh.Trimesh]:
     """Convex parts whose union approximates the mesh (CoACD, in a child process: CoACD keeps about
     6 MB of every decomposition for the life of its process, which a cell meeting new objects all
-    day would pile up; docs/limits.md, "Soak")."""
+    day would pile up; docs/limits.md, "Soak"); a one-line error when it runs over `timeout` s."""
     if not mesh.is_watertight:
         raise ValueError("convex decomposition needs a watertight mesh")
     with tempfile.TemporaryDirectory(prefix="nift-coacd-") as tmp:
@@ -58,8 +62,12 @@ def decompose(mesh: trimesh.Trimesh, config: DecompositionConfig = Decomposition
         np.savez(source, vertices=np.asarray(mesh.vertices, float), faces=np.asarray(mesh.faces, np.int64))
         code_root = str(Path(__file__).resolve().parents[2])  # the child imports this same code
         env = {**os.environ, "PYTHONPATH": os.pathsep.join(filter(None, [code_root, os.environ.get("PYTHONPATH")]))}
-        done = subprocess.run([sys.executable, "-m", "app.objects.collision", str(source), str(parts),
-                               json.dumps(asdict(config))], env=env, capture_output=True, text=True)
+        try:
+            done = subprocess.run([sys.executable, "-m", "app.objects.collision", str(source), str(parts),
+                                   json.dumps(asdict(config))], env=env, capture_output=True, text=True, timeout=timeout)
+        except subprocess.TimeoutExpired:  # subprocess.run has killed the child
+            raise RuntimeError(f"CoACD's convex decomposition ran over {timeout:.0f} s on {len(mesh.faces)} faces and "
+                               f"was stopped; try fewer faces (--collision-faces)") from None
         if done.returncode != 0:
             last = (done.stderr.strip().splitlines() or ["no message"])[-1]
             raise RuntimeError(f"CoACD's convex decomposition failed (exit {done.returncode}): {last}")

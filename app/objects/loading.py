@@ -65,15 +65,16 @@ def repair(mesh: trimesh.Trimesh, name: str = "mesh") -> tuple[trimesh.Trimesh, 
     out = trimesh.Trimesh(np.asarray(mesh.vertices, float), np.asarray(mesh.faces), process=False)
     before, open_before = len(out.vertices), open_edges(out)
     out.merge_vertices(merge_tex=True, merge_norm=True)  # texture seams store one point several times
-    out.update_faces(out.nondegenerate_faces())
-    out.update_faces(out.unique_faces())
+    if not _one_closed_body(out):  # a closed body's slivers are part of its surface: dropping them opens it
+        out.update_faces(out.nondegenerate_faces())
+        out.update_faces(out.unique_faces())
     out.remove_unreferenced_vertices()
     if len(out.vertices) < before:
         notes.append(f"merged {before - len(out.vertices)} duplicated vertices (texture seams); "
                      f"open edges {open_before} -> {open_edges(out)}")
     if not len(out.faces):
         raise NotASolid(f"{name}: every triangle is degenerate; it cannot be a solid object")
-    if out.is_watertight and shared_edges(out) == 0 and out.body_count == 1:
+    if _one_closed_body(out):
         consistent = out.is_winding_consistent
         trimesh.repair.fix_normals(out)
         if out.volume > 0:
@@ -87,6 +88,10 @@ def repair(mesh: trimesh.Trimesh, name: str = "mesh") -> tuple[trimesh.Trimesh, 
     if out.volume <= 0:
         raise NotASolid(f"{name}: the repaired surface encloses no volume; it cannot be a solid object")
     return out, notes
+
+
+def _one_closed_body(mesh: trimesh.Trimesh) -> bool:
+    return bool(len(mesh.faces)) and mesh.is_watertight and shared_edges(mesh) == 0 and mesh.body_count == 1
 
 
 def shared_edges(mesh: trimesh.Trimesh) -> int:

@@ -39,6 +39,7 @@ class JobSpec:
     seed: int | tuple[int, ...]
     pose: str = "upright"
     source: LibraryObject | None = None
+    split: str = "test"  # the procedural objects' split (app.objects.families)
 
 
 class SimHooks(JobHooks):
@@ -64,10 +65,10 @@ class SimHooks(JobHooks):
 
 
 def spawn_test_object(world: SimWorld, t: Task, pose: str, rng: np.random.Generator,
-                      source: LibraryObject | None = None) -> SpawnedObject:
-    """An unseen object: test-split instance, uniform scale and the pose setting's pose, all from rng;
-    or the imported `source` at scale 1 in a pose from rng."""
-    instance = int(rng.choice(split(t.category, "test")))
+                      source: LibraryObject | None = None, part: str = "test") -> SpawnedObject:
+    """An unseen object: an instance of split `part`, uniform scale and the pose setting's pose, all from
+    rng; or the imported `source` at scale 1 in a pose from rng."""
+    instance = int(rng.choice(split(t.category, part)))
     scale = float(rng.uniform(*SCALE_RANGE))  # drawn for imported objects too: the pose is the same draw either way
     if source is not None:
         return spawn(world, t.category, instance, pose, rng=rng, source=source)
@@ -89,7 +90,7 @@ def start_job(cell: SimCell, spec: JobSpec) -> SpawnedObject:
     alone) and the spec's object spawned."""
     reset_arm(cell)
     cell.camera.reseed(np.random.SeedSequence(spec.seed).spawn(1)[0])
-    return spawn_test_object(cell.world, spec.task, spec.pose, np.random.default_rng(spec.seed), spec.source)
+    return spawn_test_object(cell.world, spec.task, spec.pose, np.random.default_rng(spec.seed), spec.source, spec.split)
 
 
 def oracle_predictor(cell: SimCell, obj: SpawnedObject, t: Task) -> Predictor:

@@ -1,0 +1,85 @@
+"""A named set of mesh files to import and run together: a TOML file of `[[object]]` tables.
+
+    [[object]]
+    name = "shampoo-oval"        # the library name (nift run --object NAME)
+    category = "bottle"
+    file = "shampoo-oval.obj"    # relative to the set file
+    units = "m"                  # optional: the file's unit (default: inferred from the size)
+    up = "y"                     # optional: the file's up axis (default z)
+    product = "..."              # optional: what it is modelled after
+
+The team's real-shape set is `shapes/real/set.toml` (scripts/make_shape_set.py).
+"""
+from __future__ import annotations
+
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+
+from app.categories import CATEGORIES
+from app.objects.library import LibraryObject, check_name, import_object, library_dir, load_object, object_names
+
+KEYS = {"name", "category", "file", "units", "up", "product"}
+
+
+@dataclass(frozen=True)
+class SetEntry:
+    """One mesh of a set."""
+
+    name: str
+    category: str
+    file: Path
+    units: str | None = None
+    up: str = "z"
+    product: str = ""
+
+
+def read_set(path: Path) -> list[SetEntry]:
+    """The set's entries, or a one-line ValueError naming the file and what is wrong."""
+    try:
+        tables = tomllib.loads(Path(path).read_text()).get("object", [])
+    except (OSError, tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+        raise ValueError(f"{path}: not a readable object set ({exc})") from None
+    if not tables:
+        raise ValueError(f"{path}: no [[object]] tables")
+    entries = []
+    for i, t in enumerate(tables, 1):
+        unknown = set(t) - KEYS
+        missing = {"name", "category", "file"} - set(t)
+        if unknown or missing:
+            raise ValueError(f"{path}: object {i}: " + "; ".join(
+                [f"unknown key(s) {', '.join(sorted(unknown))}"] * bool(unknown)
+                + [f"missing {', '.join(sorted(missing))}"] * bool(missing)))
+        if t["category"] not in CATEGORIES:
+            raise ValueError(f"{path}: object {t['name']!r}: unknown category {t['category']!r}")
+        check_name(t["name"])
+        entries.append(SetEntry(t["name"], t["category"], Path(path).parent / t["file"], t.get("units"),
+                                t.get("up", "z"), t.get("product", "")))
+    names = [e.name for e in entries]
+    if len(set(names)) != len(names):
+        raise ValueError(f"{path}: a name is used twice ({', '.join(sorted({n for n in names if names.count(n) > 1}))})")
+    return entries
+
+
+def import_set(path: Path, directory: Path | None = None, replace: bool = False) -> list[tuple[SetEntry, list[str] | None]]:
+    """Import every entry not in the library yet (all with `replace`); (entry, the import's notes, None
+    when it was there already) each. A file that cannot be imported stops with its one-line error."""
+    root = directory or library_dir()
+    have = set(object_names(root))
+    done = []
+    for e in read_set(path):
+        if e.name in have and not replace:
+            done.append((e, None))
+            continue
+        _, notes = import_object(e.file, e.category, e.name, e.units, e.up, root, replace)
+        done.append((e, notes))
+    return done
+
+
+def set_objects(path: Path, directory: Path | None = None) -> dict[str, list[LibraryObject]]:
+    """The set's objects by category, imported first where missing."""
+    import_set(path, directory)
+    out: dict[str, list[LibraryObject]] = {}
+    for e in read_set(path):
+        out.setdefault(e.category, []).append(load_object(e.name, directory, e.category))
+    return out
