@@ -1,4 +1,5 @@
-"""Write the team's real-shape set: 21 meshes modelled after real products, as downloads come.
+"""Write the team's real-shape set: 21 meshes modelled after real products, as downloads come, and
+the mug pybullet_data ships (a real mesh no one here made, used where it is installed).
 
 Usage (repo root): .venv/bin/python scripts/make_shape_set.py [--out shapes/real]
 
@@ -211,6 +212,9 @@ def write(out: Path) -> None:
         m.export(out / file)
         lines += ["[[object]]", f'name = "{shape.name}"', f'category = "{shape.category}"', f'file = "{file}"',
                   f'units = "{shape.units}"', f'up = "{shape.up}"', f'product = "{shape.product}"', ""]
+    lines += ["[[object]]", 'name = "pybullet-mug"', 'category = "mug"', 'file = "objects/mug.obj"',
+              'package = "pybullet_data"', 'product = "the mug PyBullet ships (pybullet_data, zlib licence): a body '
+              'and an open handle part, as downloaded"', ""]
     (out / "set.toml").write_text("\n".join(lines))
 
 

@@ -18,8 +18,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--method", choices=choices(), help="method (default nift; oracle, alias teacher: the simulator's "
                    "true poses)")
     p.add_argument("--jobs", type=int, default=20, help="jobs per task (default 20); with --objects, per object")
-    p.add_argument("--objects", type=Path, metavar="SET", help="run on the meshes of a set file instead of procedural "
-                   "objects (e.g. shapes/real/set.toml; imported first where missing)")
+    p.add_argument("--objects", metavar="SET", help="run on imported objects instead of procedural ones: a set file "
+                   "(e.g. shapes/real/set.toml; imported first where missing) or a comma list of library names")
     p.add_argument("--split", default="test", choices=("test", "wide-test"),
                    help="procedural objects' split (wide-test: every family, held-out ones included)")
     p.add_argument("--tasks", default="mug,bowl,bottle", help="comma list of tasks")
@@ -50,9 +50,9 @@ def run(args: argparse.Namespace) -> int:
         writable_file(args.records, "--records")
     objects = None
     if args.objects is not None:
-        from app.objects.shape_set import set_objects
+        from app.objects.shape_set import named_objects
 
-        objects = set_objects(args.objects)
+        objects = named_objects(args.objects)
         tasks = tuple(t for t in tasks if task(t).category in objects)
         if not tasks:
             raise ValueError(f"--objects {args.objects}: no object of the tasks' categories")

@@ -37,39 +37,45 @@ def distance_on_object(a: np.ndarray, b: np.ndarray) -> float:
 
 def holding(options: list[Candidate], cloud: np.ndarray, eye: np.ndarray | None, config: HoldConfig,
             slips: list[np.ndarray]) -> tuple[list[Candidate], list[dict]]:
-    """The options whose grasps hold (moved down where that makes one hold), in their order, and the
-    record's lines for those ruled out; all options, unjudged, when every one is ruled out for its hold
-    alone (the cell tries its best rather than stop), none near a slip."""
-    judged: dict[int, tuple[np.ndarray | None, str]] = {}  # grasp rank -> the grasp that holds (None: none), why
-    kept, ruled, near_slip = [], [], []
+    """The options whose grasps hold and keep away from every slip - moved down where that makes one
+    so - in their order, and the record's lines for those ruled out. When every option is ruled out for
+    its hold alone (no slip near), all of them, as they are: the cell tries its best rather than stop."""
+    judged: dict[int, tuple[np.ndarray | None, str, bool]] = {}  # grasp rank -> grasp (None: none), why, near a slip
+    kept, ruled = [], []
     for c in options:
-        where = on_object(c.T_base_tcp[:3, 3], cloud)
-        close = [distance_on_object(where, s) for s in slips if distance_on_object(where, s) < config.slip_away]
-        if close:
-            near_slip.append(describe(c, f"ruled out: {1000 * min(close):.0f} mm from a grasp that slipped "
-                                         f"(at least {1000 * config.slip_away:.0f} mm away)"))
-            continue
         if c.grasp_rank not in judged:
-            judged[c.grasp_rank] = _holding_grasp(c.T_base_tcp, cloud, eye, config)
-        T, why = judged[c.grasp_rank]
+            judged[c.grasp_rank] = _holding_grasp(c.T_base_tcp, cloud, eye, config, slips)
+        T, why, near = judged[c.grasp_rank]
         if T is None:
-            ruled.append((c, describe(c, f"ruled out: {why}")))
+            ruled.append((c, describe(c, f"ruled out: {why}"), near))
         else:
             kept.append(replace(c, T_base_tcp=T))
-    if not kept and ruled:
-        return [c for c, _ in ruled], near_slip
-    return kept, near_slip + [line for _, line in ruled]
+    if not kept and ruled and not any(near for *_, near in ruled):
+        return [c for c, *_ in ruled], []
+    return kept, [line for _, line, _ in ruled]
 
 
-def _holding_grasp(T: np.ndarray, cloud: np.ndarray, eye: np.ndarray | None,
-                   config: HoldConfig) -> tuple[np.ndarray | None, str]:
-    """The grasp, or the first move of it down its pad plane, judged to hold (or not judged); None and
-    the first judgement's reason when none does."""
+def _holding_grasp(T: np.ndarray, cloud: np.ndarray, eye: np.ndarray | None, config: HoldConfig,
+                   slips: list[np.ndarray]) -> tuple[np.ndarray | None, str, bool]:
+    """The grasp, or the first move of it down its pad plane, that keeps `slip_away` from every slip and
+    is judged to hold (the grasp itself may be unjudged, a move must be judged to hold); else None, the
+    reason against the grasp itself, and whether that reason is a slip near it."""
+    near = _nearest_slip(T, cloud, slips)
     first: Hold = judge_hold(T, cloud, config, eye=eye)
-    if first.holds is not False:
-        return T, first.reason
+    if near >= config.slip_away and first.holds is not False:
+        return T, first.reason, False
     for distance in config.moves:
         moved = moved_down(T, distance)
-        if judge_hold(moved, cloud, config, eye=eye).holds:
-            return moved, f"moved {1000 * distance:.0f} mm down: {first.reason}"
-    return None, first.reason
+        if _nearest_slip(moved, cloud, slips) >= config.slip_away and judge_hold(moved, cloud, config, eye=eye).holds:
+            return moved, f"moved {1000 * distance:.0f} mm down: " + (first.reason if near >= config.slip_away
+                                                                      else "away from a grasp that slipped"), False
+    if near < config.slip_away:
+        return None, (f"{1000 * near:.0f} mm from a grasp that slipped (at least {1000 * config.slip_away:.0f} mm "
+                      f"away), and no move down holds"), True
+    return None, first.reason, False
+
+
+def _nearest_slip(T: np.ndarray, cloud: np.ndarray, slips: list[np.ndarray]) -> float:
+    """Distance (m) on the object from the grasp's TCP to the nearest slipped grasp (inf: none slipped)."""
+    where = on_object(T[:3, 3], cloud)
+    return min((distance_on_object(where, s) for s in slips), default=np.inf)

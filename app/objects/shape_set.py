@@ -7,6 +7,7 @@
     units = "m"                  # optional: the file's unit (default: inferred from the size)
     up = "y"                     # optional: the file's up axis (default z)
     product = "..."              # optional: what it is modelled after
+    package = "pybullet_data"    # optional: `file` is inside this installed Python package instead
 
 The team's real-shape set is `shapes/real/set.toml` (scripts/make_shape_set.py).
 """
@@ -19,7 +20,7 @@ from pathlib import Path
 from app.categories import CATEGORIES
 from app.objects.library import LibraryObject, check_name, import_object, library_dir, load_object, object_names
 
-KEYS = {"name", "category", "file", "units", "up", "product"}
+KEYS = {"name", "category", "file", "units", "up", "product", "package"}
 
 
 @dataclass(frozen=True)
@@ -53,12 +54,23 @@ def read_set(path: Path) -> list[SetEntry]:
         if t["category"] not in CATEGORIES:
             raise ValueError(f"{path}: object {t['name']!r}: unknown category {t['category']!r}")
         check_name(t["name"])
-        entries.append(SetEntry(t["name"], t["category"], Path(path).parent / t["file"], t.get("units"),
+        folder = _package_dir(t["package"], path) if "package" in t else Path(path).parent
+        entries.append(SetEntry(t["name"], t["category"], folder / t["file"], t.get("units"),
                                 t.get("up", "z"), t.get("product", "")))
     names = [e.name for e in entries]
     if len(set(names)) != len(names):
         raise ValueError(f"{path}: a name is used twice ({', '.join(sorted({n for n in names if names.count(n) > 1}))})")
     return entries
+
+
+def _package_dir(package: str, path: Path) -> Path:
+    """The folder of an installed Python package, or a one-line error naming the set file."""
+    import importlib.util
+
+    spec = importlib.util.find_spec(package) if package.isidentifier() else None
+    if spec is None or not spec.submodule_search_locations:
+        raise ValueError(f"{path}: package {package!r} is not installed")
+    return Path(list(spec.submodule_search_locations)[0])
 
 
 def import_set(path: Path, directory: Path | None = None, replace: bool = False) -> list[tuple[SetEntry, list[str] | None]]:
@@ -82,4 +94,18 @@ def set_objects(path: Path, directory: Path | None = None) -> dict[str, list[Lib
     out: dict[str, list[LibraryObject]] = {}
     for e in read_set(path):
         out.setdefault(e.category, []).append(load_object(e.name, directory, e.category))
+    return out
+
+
+def named_objects(spec: str, directory: Path | None = None) -> dict[str, list[LibraryObject]]:
+    """Objects by category from a set file's path (imported first where missing) or a comma list of
+    library names; a one-line error for an unknown name or an unreadable set."""
+    if spec.endswith(".toml") or Path(spec).is_file():
+        return set_objects(Path(spec), directory)
+    out: dict[str, list[LibraryObject]] = {}
+    for name in (n.strip() for n in spec.split(",") if n.strip()):
+        obj = load_object(name, directory)
+        out.setdefault(obj.category, []).append(obj)
+    if not out:
+        raise ValueError(f"--objects {spec!r}: name a set file or library objects")
     return out

@@ -77,13 +77,13 @@ def held_width(T_base_tcp: np.ndarray, cloud: np.ndarray, geometry: GripperGeome
     near = near[swept_mask(T_base_tcp, cloud, geometry, beside)]
     if len(near) < min_points:
         return stroke
-    near = near[_nearest_layer(near[:, 1])]
+    near = near[nearest_layer(near[:, 1])]
     slices = np.floor(near[:, 0] / SLICE)
     thickest = max(np.ptp(near[slices == k, 1]) for k in np.unique(slices))
     return float(min(stroke, thickest + margin))
 
 
-def _nearest_layer(y: np.ndarray) -> np.ndarray:
+def nearest_layer(y: np.ndarray) -> np.ndarray:
     """(K,) bool: the values of y (K,) in the run nearest 0, runs parting where sorted neighbours are
     more than GAP apart."""
     order = np.argsort(y)

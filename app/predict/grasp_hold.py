@@ -31,7 +31,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from app.predict.grasp_centering import swept_points
+from app.predict.grasp_centering import nearest_layer, swept_points
 from hardware.gripper_geometry import GripperGeometry
 
 UP = np.array([0.0, 0.0, 1.0])  # against gravity, in the base frame
@@ -49,8 +49,9 @@ class HoldConfig:
     patch_depth: float = 0.004  # m: bins of the ridge this close to the outermost one are the pad's patch
     min_cells: int = 4  # fewer points on a side: that side is not judged
     seen_side: float = -0.3  # a side whose pad faces away from the camera beyond this cosine is hidden
-    min_width: float = 0.012  # m between the outermost points: a thinner grip (a rim's wall) is no wedge
-    moves: tuple[float, ...] = (0.01, 0.02, 0.03)  # m: a grasp that would slide out is tried this far down
+    min_width: float = 0.012  # m: a thinner grip (a rim's wall) is held flat between the pads and not judged
+    moves: tuple[float, ...] = (0.01, 0.02, 0.03, 0.04, 0.05)  # m: a grasp that would slide out, or lies near
+    # one that slipped, is tried this far down its pad plane
     slip_away: float = 0.03  # m: after a slip, grasps this close to the slipped one are not tried again
     min_gravity: float = 0.3  # |u| below this: gravity runs along the closing axis, no taper to judge
 
@@ -107,6 +108,9 @@ def judge_hold(T_base_tcp: np.ndarray, cloud: np.ndarray, config: HoldConfig = H
     p = swept_points(T_base_tcp, cloud, geometry)  # (K, 3) TCP frame
     if len(p) < 2 * config.min_cells:
         return Hold(None, reason="too few points between the fingers to judge the hold")
+    p = p[nearest_layer(p[:, 1])]  # what the fingers close on: a mug's far wall across its cavity is not held
+    if np.ptp(p[:, 1]) < config.min_width:
+        return Hold(None, reason=f"a grip {1000 * np.ptp(p[:, 1]):.0f} mm thick (a wall): held flat, not judged")
     middle = (p[:, 1].min() + p[:, 1].max()) / 2
     sides = (1, -1)
     if eye is not None:
@@ -121,8 +125,7 @@ def judge_hold(T_base_tcp: np.ndarray, cloud: np.ndarray, config: HoldConfig = H
     judged = np.linalg.norm(u) >= config.min_gravity
     u = u / max(np.linalg.norm(u), 1e-12)
     cone = max(np.degrees(np.arccos(min(1.0, abs(n[1])))) for n in normals.values())
-    wedge = judged and np.ptp(p[:, 1]) >= config.min_width  # a thin wall is held flat, not squeezed out
-    taper = float(np.mean([np.degrees(np.arcsin(np.clip(n @ u, -1, 1))) for n in normals.values()])) if wedge else 0.0
+    taper = float(np.mean([np.degrees(np.arcsin(np.clip(n @ u, -1, 1))) for n in normals.values()])) if judged else 0.0
     limit = np.degrees(np.arctan(config.friction))
     if cone > limit:
         return Hold(False, taper, cone, f"the pads' contacts are not antipodal: a contact normal is {cone:.0f} deg "
