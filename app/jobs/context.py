@@ -47,7 +47,7 @@ class JobContext:
     placer: Placer | None = None  # imitates the place again after the second look (None: no second look)
     first: Frame | None = None  # the first frame: the fixture without the object
     points: np.ndarray | None = None  # the last look's object points (M, 3) before resampling
-    fell: bool = False  # a place missed: looks cover the table around the fixture (`JobConfig.fallen_perception`)
+    fell: bool = False  # a place missed or a grasp slipped: looks cover the table around the fixture (`JobConfig.fallen_perception`)
 
     def stage(self, name: str):
         """Time stage `name`; a failure in it is recorded as this stage's (`app.jobs.record.stage`)."""
@@ -83,6 +83,11 @@ class JobContext:
         its lines run as planned (a 30 N stop would cut its hangs short), and a shelf's place line ends
         pressing on the shelf (docs/jobs.md)."""
         return not method_record(self.config.method).true_poses and is_hang(self.t)
+
+    def guards_set_down(self) -> bool:
+        """Whether a place on a fixture without a peg (a shelf) is set down under contact detection: a
+        predicted place, which may be a few centimetres low (the oracle's ends pressing on the shelf)."""
+        return not method_record(self.config.method).true_poses and not is_hang(self.t)
 
     def looks_for_hole(self) -> bool:
         """Whether the job tries places built from the handle hole: a hang by a method that does not read

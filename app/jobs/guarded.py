@@ -29,6 +29,8 @@ from app.motion.trajectory import remainder
 from hardware.se3 import make_pose, pose_to_ur
 
 PLACE_ARRIVED = 0.03  # m: a place line stopped by a contact this close to its place lets go there
+SET_DOWN_ARRIVED = 0.05  # m: an object set down on a shelf that meets the board this close to its place is let go
+# there (a predicted place a few centimetres too low pressed a tall bottle into the board: a protective stop)
 SEARCH_RINGS = ((0.006, 6), (0.012, 8), (0.018, 10))  # (radius m, offsets on the ring) tried about the place line
 SEARCH_SPEED, SEARCH_ACCELERATION = 0.1, 0.5  # m/s, m/s^2 of the search's lines
 
@@ -61,6 +63,19 @@ def guarded_place(job: JobContext, place) -> bool:
     if met > 0.0:
         job.result.notes.append(f"place: the held object met the fixture {1000 * met:.0f} mm before its place; "
                                 "let go there")
+    return True
+
+
+def guarded_set_down(job: JobContext, place) -> bool:
+    """A predicted place on a shelf, under contact detection: the held object meeting the board within
+    `SET_DOWN_ARRIVED` of the place is let go there (ContactStop farther out: it met something else).
+    Whether the arm stopped off the planned place."""
+    met, why = guarded_line(job, place, job.config.place_contact_force)
+    if met is None:
+        return False
+    if met > SET_DOWN_ARRIVED:
+        raise ContactStop(f"place: the held object met something {1000 * met:.0f} mm before its place ({why})")
+    job.result.notes.append(f"place: the held object met the shelf {1000 * met:.0f} mm before its place; let go there")
     return True
 
 

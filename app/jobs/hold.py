@@ -7,7 +7,7 @@ the top, onto the neck or the body); when no move holds, it is ruled out and the
 After a slip, grasps within `HoldConfig.slip_away` of the slipped one are ruled out too. Positions on
 the object are compared in the cloud's principal-axis frame - the position along the longest axis, of
 either sign, and the distance from it - so the object may have fallen, turned about its axis, or
-flipped end over end since.
+flipped end over end since. When every option is ruled out, the job tries them all as they are.
 """
 from __future__ import annotations
 
@@ -38,8 +38,8 @@ def distance_on_object(a: np.ndarray, b: np.ndarray) -> float:
 def holding(options: list[Candidate], cloud: np.ndarray, eye: np.ndarray | None, config: HoldConfig,
             slips: list[np.ndarray]) -> tuple[list[Candidate], list[dict]]:
     """The options whose grasps hold and keep away from every slip - moved down where that makes one
-    so - in their order, and the record's lines for those ruled out. When every option is ruled out for
-    its hold alone (no slip near), all of them, as they are: the cell tries its best rather than stop."""
+    so - in their order, and the record's lines for those ruled out. When every option is ruled out, all
+    of them, as they are: the cell tries its best rather than stop."""
     judged: dict[int, tuple[np.ndarray | None, str, bool]] = {}  # grasp rank -> grasp (None: none), why, near a slip
     kept, ruled = [], []
     for c in options:
@@ -50,7 +50,7 @@ def holding(options: list[Candidate], cloud: np.ndarray, eye: np.ndarray | None,
             ruled.append((c, describe(c, f"ruled out: {why}"), near))
         else:
             kept.append(replace(c, T_base_tcp=T))
-    if not kept and ruled and not any(near for *_, near in ruled):
+    if not kept and ruled:  # nothing better to do than try them: a cell that stops gains nothing
         return [c for c, *_ in ruled], []
     return kept, [line for _, line, _ in ruled]
 

@@ -35,7 +35,7 @@ from app.jobs.check import sighting
 from app.jobs.choice import choose, describe
 from app.jobs.clearance import gripper_clear
 from app.jobs.context import JobContext, Placer, Predictor
-from app.jobs.guarded import guarded_leave, guarded_line, guarded_place
+from app.jobs.guarded import guarded_leave, guarded_line, guarded_place, guarded_set_down
 from app.jobs.held_place import look_and_place
 from app.jobs.hold import holding, on_object
 from app.jobs.record import STAGES, JobHooks, JobResult, check_held, ur
@@ -134,8 +134,9 @@ def _run(job: JobContext) -> None:
             job.result.attempts.append({"attempt": attempt, **describe(chosen, str(miss))})
             if last:
                 raise type(miss)(f"{miss} (attempt {attempt} of {attempt})") from None
-            if isinstance(miss, GraspSlipped):
+            if isinstance(miss, GraspSlipped):  # it may lie anywhere now: the next look takes in the whole table
                 slips.append(on_object(chosen.T_base_tcp[:3, 3], job.points))
+                job.fell = True
             _recover(job, planner, pick)
             options = [c for c in options if c.grasp_rank != chosen.grasp_rank] or None  # none left: imitate again
             continue
@@ -174,9 +175,6 @@ def _holding(job: JobContext, options: list, slips: list[np.ndarray]) -> list:
         return options
     kept, ruled = holding(options, job.points, job.T_base_cam[:3, 3], job.config.hold, slips)
     job.result.candidates += ruled
-    if not kept:
-        with job.stage("plan"):
-            raise NoCandidate(f"every one of {len(ruled)} candidates lies near a grasp that slipped", ruled)
     return kept
 
 
@@ -297,6 +295,8 @@ def _place(job: JobContext, planner: Planner, plan, sent: np.ndarray, again: boo
     with job.stage("place"):
         if job.guards_hang():
             short = guarded_place(job, plan.segment("place"))
+        elif job.guards_set_down():
+            short = guarded_set_down(job, plan.segment("place"))
         else:
             execute(job.arm, plan.segment("place"), tolerance)
             short = False

@@ -163,7 +163,11 @@ def _store(root: Path, name: str, info: dict, mesh: trimesh.Trimesh, parts: list
             staging.rename(final)
             shutil.rmtree(old, ignore_errors=True)
         else:
-            staging.rename(final)
+            try:
+                staging.rename(final)
+            except OSError:  # another process imported the same name meanwhile: theirs stands, whole
+                if not (final / "object.json").is_file():
+                    raise
     finally:
         shutil.rmtree(staging, ignore_errors=True)
 
