@@ -35,6 +35,7 @@ from app.predict.grasp_centering import nearest_layer, swept_points
 from hardware.gripper_geometry import GripperGeometry
 
 UP = np.array([0.0, 0.0, 1.0])  # against gravity, in the base frame
+RIDGE_BINS = 3  # the ridge's slope is fitted over at least this many bins
 
 
 @dataclass(frozen=True)
@@ -80,6 +81,10 @@ def ridge_slope(along: np.ndarray, out: np.ndarray, config: HoldConfig) -> float
     top = np.full(len(keys), -np.inf)
     np.maximum.at(top, which.ravel(), out)  # (B,) the ridge
     patch = top >= top.max() - config.patch_depth
+    if patch.sum() < RIDGE_BINS:  # a contact at the pad's edge on a surface that keeps widening beyond it:
+        order = np.argsort(np.abs(np.arange(len(keys)) - int(np.argmax(top))), kind="stable")
+        patch = np.zeros(len(keys), bool)
+        patch[order[:RIDGE_BINS]] = True  # the bins next to the outermost one show how steeply it widens
     if patch.sum() < 2:
         return None
     return float(np.polyfit((keys[patch] + 0.5) * config.cell, top[patch], 1)[0])
