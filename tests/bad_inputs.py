@@ -66,7 +66,10 @@ CORPUS: list[tuple[tuple[str, ...], str]] = [
     (("objects", "import", "mug-mm.stl", "--category", "mug", "--name", "My Mug"), "My Mug"),
     (("objects", "import", "mug-mm.stl", "--category", "teapot"), "--category"),
     (("objects", "import", "mug-mm.stl", "--category", "mug", "--collision-faces", "5"), "--collision-faces"),
+    (("objects", "import-set", "nosuch.toml"), "nosuch.toml"),
+    (("objects", "import-set", "unknown.toml"), "unknown.toml"),
     (("run", "--task", "mug", "--object", "nosuch"), "nosuch"),
+    (("bench-jobs", "--objects", "nosuch", "--jobs", "1"), "nosuch"),
     (("bench", "--tasks", "mug", "--objects", "nosuch", "--out", "b"), "nosuch"),
     (("bench", "--demo-dir", "missing-demos", "--out", "b"), "missing-demos"),
     # make-data, train

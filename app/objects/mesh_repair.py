@@ -25,6 +25,7 @@ import numpy as np
 import trimesh
 
 DROPPED_VOLUME = 0.02  # a closed piece enclosing less than this share of the largest piece's volume is debris
+FLAT = 1e-6  # a closed piece enclosing less than this times its largest extent cubed is flat: it encloses nothing
 
 
 @dataclass(frozen=True)
@@ -98,7 +99,7 @@ def close_piece(piece: trimesh.Trimesh) -> Piece:
         out = step(piece.copy())
         if out is not None and out.is_watertight and out.is_winding_consistent:
             trimesh.repair.fix_normals(out)
-            if out.volume > 0:
+            if out.volume > FLAT * out.extents.max() ** 3:
                 return Piece(out, True, how)
     return Piece(piece, False)
 
