@@ -98,8 +98,10 @@ def close_piece(piece: trimesh.Trimesh) -> Piece:
     for how, step in attempts:
         out = step(piece.copy())
         if out is not None and out.is_watertight and out.is_winding_consistent:
-            trimesh.repair.fix_normals(out)
-            if out.volume > FLAT * out.extents.max() ** 3:
+            with np.errstate(divide="ignore", invalid="ignore"):  # a flat piece's centre of mass divides by 0
+                trimesh.repair.fix_normals(out)
+                encloses = out.volume > FLAT * out.extents.max() ** 3
+            if encloses:
                 return Piece(out, True, how)
     return Piece(piece, False)
 
