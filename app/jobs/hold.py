@@ -20,14 +20,19 @@ from app.predict.grasp_hold import Hold, HoldConfig, judge_hold, moved_down
 from app.predict.pairs import Candidate
 
 
-def on_object(point: np.ndarray, cloud: np.ndarray) -> np.ndarray:
-    """(2,) where a point (3,) lies on the object the cloud (N, 3) shows: its coordinate along the
-    cloud's principal axis (from the centroid) and its distance from that axis."""
+def object_axis(cloud: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The cloud's (N, 3) centroid (3,) and longest principal axis (3,)."""
     centre = cloud.mean(axis=0)
-    axis = np.linalg.svd(cloud - centre, full_matrices=False)[2][0]  # (3,) the longest principal axis
+    return centre, np.linalg.svd(cloud - centre, full_matrices=False)[2][0]
+
+
+def on_object(point: np.ndarray, axis: tuple[np.ndarray, np.ndarray]) -> np.ndarray:
+    """(2,) where a point (3,) lies on the object whose `object_axis` is given: its coordinate along the
+    axis (from the centroid) and its distance from it."""
+    centre, direction = axis
     d = np.asarray(point, float) - centre
-    along = float(d @ axis)
-    return np.array([along, float(np.linalg.norm(d - along * axis))])
+    along = float(d @ direction)
+    return np.array([along, float(np.linalg.norm(d - along * direction))])
 
 
 def distance_on_object(a: np.ndarray, b: np.ndarray) -> float:
@@ -42,9 +47,10 @@ def holding(options: list[Candidate], cloud: np.ndarray, eye: np.ndarray | None,
     of them, as they are: the cell tries its best rather than stop."""
     judged: dict[int, tuple[np.ndarray | None, str, bool]] = {}  # grasp rank -> grasp (None: none), why, near a slip
     kept, ruled = [], []
+    axis = object_axis(cloud) if slips else None  # slips are compared on the object, in its own axes
     for c in options:
         if c.grasp_rank not in judged:
-            judged[c.grasp_rank] = _holding_grasp(c.T_base_tcp, cloud, eye, config, slips)
+            judged[c.grasp_rank] = _holding_grasp(c.T_base_tcp, cloud, eye, config, slips, axis)
         T, why, near = judged[c.grasp_rank]
         if T is None:
             ruled.append((c, describe(c, f"ruled out: {why}"), near))
@@ -56,17 +62,17 @@ def holding(options: list[Candidate], cloud: np.ndarray, eye: np.ndarray | None,
 
 
 def _holding_grasp(T: np.ndarray, cloud: np.ndarray, eye: np.ndarray | None, config: HoldConfig,
-                   slips: list[np.ndarray]) -> tuple[np.ndarray | None, str, bool]:
+                   slips: list[np.ndarray], axis: tuple | None) -> tuple[np.ndarray | None, str, bool]:
     """The grasp, or the first move of it down its pad plane, that keeps `slip_away` from every slip and
     is judged to hold (the grasp itself may be unjudged, a move must be judged to hold); else None, the
     reason against the grasp itself, and whether that reason is a slip near it."""
-    near = _nearest_slip(T, cloud, slips)
+    near = _nearest_slip(T, axis, slips)
     first: Hold = judge_hold(T, cloud, config, eye=eye)
     if near >= config.slip_away and first.holds is not False:
         return T, first.reason, False
     for distance in config.moves:
         moved = moved_down(T, distance)
-        if _nearest_slip(moved, cloud, slips) >= config.slip_away and judge_hold(moved, cloud, config, eye=eye).holds:
+        if _nearest_slip(moved, axis, slips) >= config.slip_away and judge_hold(moved, cloud, config, eye=eye).holds:
             return moved, f"moved {1000 * distance:.0f} mm down: " + (first.reason if near >= config.slip_away
                                                                       else "away from a grasp that slipped"), False
     if near < config.slip_away:
@@ -75,7 +81,10 @@ def _holding_grasp(T: np.ndarray, cloud: np.ndarray, eye: np.ndarray | None, con
     return None, first.reason, False
 
 
-def _nearest_slip(T: np.ndarray, cloud: np.ndarray, slips: list[np.ndarray]) -> float:
-    """Distance (m) on the object from the grasp's TCP to the nearest slipped grasp (inf: none slipped)."""
-    where = on_object(T[:3, 3], cloud)
-    return min((distance_on_object(where, s) for s in slips), default=np.inf)
+def _nearest_slip(T: np.ndarray, axis: tuple | None, slips: list[np.ndarray]) -> float:
+    """Distance (m) on the object (`object_axis`) from the grasp's TCP to the nearest slipped grasp (inf:
+    none slipped)."""
+    if not slips:
+        return np.inf
+    where = on_object(T[:3, 3], axis)
+    return min(distance_on_object(where, s) for s in slips)

@@ -37,7 +37,7 @@ from app.jobs.clearance import gripper_clear
 from app.jobs.context import JobContext, Placer, Predictor
 from app.jobs.guarded import guarded_leave, guarded_line, guarded_place, guarded_set_down
 from app.jobs.held_place import look_and_place
-from app.jobs.hold import holding, on_object
+from app.jobs.hold import holding, object_axis, on_object
 from app.jobs.record import STAGES, JobHooks, JobResult, check_held, ur
 from app.jobs.settings import JobConfig, looks_again
 from app.motion.executor import back_to_start, execute, motion_failure
@@ -135,7 +135,7 @@ def _run(job: JobContext) -> None:
             if last:
                 raise type(miss)(f"{miss} (attempt {attempt} of {attempt})") from None
             if isinstance(miss, GraspSlipped):  # it may lie anywhere now: the next look takes in the whole table
-                slips.append(on_object(chosen.T_base_tcp[:3, 3], job.points))
+                slips.append(on_object(chosen.T_base_tcp[:3, 3], object_axis(job.points)))
                 job.fell = True
             _recover(job, planner, pick)
             options = [c for c in options if c.grasp_rank != chosen.grasp_rank] or None  # none left: imitate again

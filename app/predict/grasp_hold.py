@@ -66,12 +66,6 @@ class Hold:
     cone_deg: float | None = None  # the larger angle of a contact normal from the closing axis
     reason: str = ""
 
-    def record(self) -> dict:
-        """JSON-ready."""
-        rounded = {k: None if v is None else round(v, 1) for k, v in (("taper_deg", self.taper_deg),
-                                                                     ("cone_deg", self.cone_deg))}
-        return {"holds": self.holds, **rounded, "reason": self.reason}
-
 
 def ridge_slope(along: np.ndarray, out: np.ndarray, config: HoldConfig) -> float | None:
     """Slope d(out)/d(along) of the ridge - the outermost point per `cell`-wide bin of `along` - over the
@@ -125,8 +119,7 @@ def judge_hold(T_base_tcp: np.ndarray, cloud: np.ndarray, config: HoldConfig = H
     normals = {s: n for s, n in normals.items() if n is not None}
     if not normals:
         return Hold(None, reason="no pad's contact patch is seen well enough to judge the hold")
-    u = T_base_tcp[:3, :3].T @ up  # (3,) against gravity, TCP frame
-    u[1] = 0.0  # into the pad plane
+    u = up_in_pad_plane(T_base_tcp, up)
     judged = np.linalg.norm(u) >= config.min_gravity
     u = u / max(np.linalg.norm(u), 1e-12)
     cone = max(np.degrees(np.arccos(min(1.0, abs(n[1])))) for n in normals.values())
@@ -141,11 +134,17 @@ def judge_hold(T_base_tcp: np.ndarray, cloud: np.ndarray, config: HoldConfig = H
     return Hold(True, taper, cone, "holds: antipodal contacts, no taper that slides out")
 
 
+def up_in_pad_plane(T_base_tcp: np.ndarray, up: np.ndarray = UP) -> np.ndarray:
+    """(3,) the direction against gravity in the TCP frame, less its part along the closing axis (y)."""
+    u = T_base_tcp[:3, :3].T @ up
+    u[1] = 0.0
+    return u
+
+
 def moved_down(T_base_tcp: np.ndarray, distance: float, up: np.ndarray = UP) -> np.ndarray:
     """The grasp moved `distance` m along gravity within its pad plane (its orientation kept): away from
     a cap that narrows towards the top, towards the neck or the body under it."""
-    u = T_base_tcp[:3, :3].T @ up  # (3,) TCP frame
-    u[1] = 0.0
+    u = up_in_pad_plane(T_base_tcp, up)
     if np.linalg.norm(u) < 1e-9:
         return T_base_tcp.copy()
     out = T_base_tcp.copy()
