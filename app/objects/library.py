@@ -102,10 +102,9 @@ def simplified(mesh: trimesh.Trimesh, faces: int = COLLISION_FACES) -> trimesh.T
     ran for over 14 minutes (docs/objects.md)."""
     if len(mesh.faces) <= faces:
         return mesh
-    import manifold3d as m3d
+    from app.objects.mesh_repair import to_manifold
 
-    solid = m3d.Manifold(m3d.Mesh(vert_properties=np.asarray(mesh.vertices, np.float32),
-                                  tri_verts=np.asarray(mesh.faces, np.uint32)))
+    solid = to_manifold(mesh)
     out = mesh
     for tolerance in SIMPLIFY_TOLERANCES:
         small = solid.simplify(tolerance).to_mesh()

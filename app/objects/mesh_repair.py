@@ -126,12 +126,19 @@ def _meshfix(mesh: trimesh.Trimesh) -> trimesh.Trimesh | None:
     return out if (out.extents >= 0.9 * mesh.extents).all() else None  # it dropped a part of the piece
 
 
+def to_manifold(mesh: trimesh.Trimesh):
+    """A closed trimesh as a manifold3d solid."""
+    import manifold3d as m3d
+
+    return m3d.Manifold(m3d.Mesh(vert_properties=np.asarray(mesh.vertices, np.float32),
+                                 tri_verts=np.asarray(mesh.faces, np.uint32)))
+
+
 def union(parts: list[trimesh.Trimesh]) -> trimesh.Trimesh:
     """The exact boolean union of closed parts (manifold3d)."""
     import manifold3d as m3d
 
-    solids = [m3d.Manifold(m3d.Mesh(vert_properties=np.asarray(p.vertices, np.float32),
-                                    tri_verts=np.asarray(p.faces, np.uint32))) for p in parts]
+    solids = [to_manifold(p) for p in parts]
     whole = m3d.Manifold.batch_boolean(solids, m3d.OpType.Add) if len(solids) > 1 else solids[0]
     out = whole.to_mesh()
     return trimesh.Trimesh(np.asarray(out.vert_properties[:, :3], float), np.asarray(out.tri_verts), process=True)

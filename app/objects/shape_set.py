@@ -90,9 +90,8 @@ def import_set(path: Path, directory: Path | None = None, replace: bool = False)
 
 def set_objects(path: Path, directory: Path | None = None) -> dict[str, list[LibraryObject]]:
     """The set's objects by category, imported first where missing."""
-    import_set(path, directory)
     out: dict[str, list[LibraryObject]] = {}
-    for e in read_set(path):
+    for e, _ in import_set(path, directory):
         out.setdefault(e.category, []).append(load_object(e.name, directory, e.category))
     return out
 
