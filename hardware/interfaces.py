@@ -129,6 +129,10 @@ class Arm(Device):
         """Measured joint velocities (6,), rad/s."""
 
     @abstractmethod
+    def getTimestamp(self) -> float:
+        """Seconds on the controller's clock (ur_rtde's `RTDEReceiveInterface.getTimestamp`)."""
+
+    @abstractmethod
     def getActualTCPPose(self) -> np.ndarray:
         """TCP pose [x, y, z, rx, ry, rz] in the base frame, with the current TCP offset."""
 

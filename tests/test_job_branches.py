@@ -136,6 +136,11 @@ def test_a_job_on_fake_devices_places_the_bottle_where_it_was_sent(cell, scene):
     assert placed_on_the_shelf(cell) and at_home(cell) and not cell.gripper.object_detected
     assert result.seen.startswith("placed:") and cell.arm.stops == 0
     assert [m.guarded for m in cell.arm.motions].count(True) == 2  # the approach line and the shelf's set-down
+    # every motion went through the meter: its seconds are the fake controller's clock, its travel at least
+    # the straight joint distance of each motion
+    assert result.motion["motion_seconds"] == pytest.approx(cell.arm.clock, abs=2e-3) and cell.arm.clock > 5.0
+    straight = sum(np.abs(m.q_end - m.q_start).sum() for m in cell.arm.motions)
+    assert straight - 2e-3 <= result.motion["joint_travel_rad"] <= 3 * straight
 
 
 @pytest.mark.parametrize("at", [0.8, 0.2])

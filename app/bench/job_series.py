@@ -1,5 +1,6 @@
-"""`nift bench-jobs`: executed pick-and-place in the sim cell - planning time, trajectory length,
-job wall time and success over a series of jobs per task, with the failures counted by stage."""
+"""`nift bench-jobs`: executed pick-and-place in the sim cell - success over a series of jobs per task,
+with the failures counted by stage, and the cycle's figures (median and p90): the arm's seconds in
+motion and joint travel, planning, imitation, decision and wall time."""
 from __future__ import annotations
 
 from collections import Counter
@@ -23,10 +24,33 @@ def _moved_place(look: dict) -> bool:
     return bool(look.get("used")) and (bool(look.get("pick_only")) or look.get("place_moved_m", 0.0) > 0.01)
 
 
+DECIDING = ("perceive", "imitate", "plan")  # the stages between the first picture and the arm's first motion
+
+
+def spread(values: list[float], digits: int = 2) -> dict[str, float] | None:
+    """{"median", "p90"} of the values (None when there are none)."""
+    if not values:
+        return None
+    return {"median": round(float(np.median(values)), digits), "p90": round(float(np.percentile(values, 90)), digits)}
+
+
+def timings(name: str, results: list[JobResult]) -> dict:
+    """The cycle's figures of one task's series, median and p90 over its jobs: the arm's seconds in
+    motion and its joint travel (`app.jobs.motion_meter`), the chosen plan's planning time, the
+    imitation stage, the decision (perceive, imitate and plan stages) and the job's wall time."""
+    moved = [r.motion for r in results if r.motion]
+    return {
+        f"{name}_motion_seconds": spread([m["motion_seconds"] for m in moved]),
+        f"{name}_joint_travel_rad": spread([m["joint_travel_rad"] for m in moved]),
+        f"{name}_planning_seconds": spread([r.plan["planning_seconds"] for r in results if r.plan], 3),
+        f"{name}_imitate_seconds": spread([r.seconds["imitate"] for r in results if "imitate" in r.seconds]),
+        f"{name}_decide_seconds": spread([sum(r.seconds.get(s, 0.0) for s in DECIDING) for r in results]),
+        f"{name}_job_seconds": spread([sum(r.seconds.values()) for r in results]),
+    }
+
+
 def summarise(name: str, results: list[JobResult]) -> dict:
     """Figures of one task's series."""
-    planned = [r for r in results if r.plan]
-    wall = [sum(r.seconds.values()) for r in results]
     failed = [r for r in results if not r.success and r.failure_kind != INTERNAL_ERROR]  # the cell's failures
     no_grasp = sum(r.failure_kind == NoDemoLikeGrasp.kind for r in results)
     bugs = sum(r.failure_kind == INTERNAL_ERROR for r in results)
@@ -34,16 +58,12 @@ def summarise(name: str, results: list[JobResult]) -> dict:
     out = {
         f"{name}_success": f"{sum(r.success for r in results)}/{len(results)}",
         f"{name}_success_rate": round(float(np.mean([r.success for r in results])), 3),
-        f"{name}_median_job_seconds": round(float(np.median(wall)), 2),
-        f"{name}_median_imitate_seconds": round(float(np.median([r.seconds.get("imitate", 0.0) for r in results])), 2),
         f"{name}_mean_attempts": round(float(np.mean([max(1, len(r.attempts)) for r in results])), 2),
         f"{name}_no_demo_like_grasp": no_grasp,  # jobs where no grasp like the demos' exists in the pose
         f"{name}_success_where_a_demo_like_grasp_exists":
             round(sum(r.success for r in results) / possible, 3) if possible else None,
     }
-    if planned:
-        out[f"{name}_median_planning_seconds"] = round(float(np.median([r.plan["planning_seconds"] for r in planned])), 3)
-        out[f"{name}_median_trajectory_seconds"] = round(float(np.median([r.plan["trajectory_seconds"] for r in planned])), 2)
+    out.update(timings(name, results))
     looked = [r.look for r in results if r.look]
     if looked:
         out[f"{name}_second_look_used"] = sum(bool(k.get("used")) for k in looked)

@@ -38,6 +38,7 @@ from app.jobs.context import JobContext, Placer, Predictor
 from app.jobs.guarded import guarded_leave, guarded_line, guarded_place, guarded_set_down
 from app.jobs.held_place import look_and_place
 from app.jobs.hold import holding, object_axis, on_object
+from app.jobs.motion_meter import MeteredArm
 from app.jobs.record import STAGES, JobHooks, JobResult, check_held, ur
 from app.jobs.settings import JobConfig, looks_again
 from app.motion.executor import back_to_start, execute, motion_failure
@@ -98,8 +99,9 @@ def run_job(t: Task, arm: Arm, gripper: Gripper, camera: DepthCamera, T_base_cam
             return predict(t, cloud, settings, T_base_fixture,
                            gripper_clear(scene, cloud, config.table_z, config.motion.approach_distance,
                                          settings.center, settings.align))
+    metered = MeteredArm(arm)  # what the job moved, for the record
     try:
-        _run(JobContext(t, arm, gripper, camera, T_base_cam, T_base_fixture, scene, kin, config, hooks, predictor,
+        _run(JobContext(t, metered, gripper, camera, T_base_cam, T_base_fixture, scene, kin, config, hooks, predictor,
                         result, placer))
         result.arm = "home"
     except CellFailure as exc:
@@ -111,6 +113,7 @@ def run_job(t: Task, arm: Arm, gripper: Gripper, camera: DepthCamera, T_base_cam
         result.arm = _make_safe(arm, gripper)
     finally:
         scene.remove(OBJECT)
+        result.motion = metered.record()
     return result
 
 

@@ -50,6 +50,7 @@ class JobResult:
     seconds: dict[str, float] = field(default_factory=dict)  # wall time per stage, summed over attempts
     poses: dict[str, list[float]] = field(default_factory=dict)  # UR poses [x y z rx ry rz], base frame
     plan: dict[str, float] = field(default_factory=dict)
+    motion: dict[str, float] = field(default_factory=dict)  # what the arm moved: seconds in motion, joint travel
     arm: str = ""  # the arm's state at the end
     seen: str = ""  # the job's own camera check after the release (`app.jobs.check`)
     candidates: list[dict] = field(default_factory=list)  # every pair the plan stage looked at (`choice.describe`)
@@ -64,7 +65,7 @@ class JobResult:
         return {"task": self.task, "method": self.method, "success": self.success, "failed_stage": self.failed_stage,
                 "failure_kind": self.failure_kind, "reason": self.reason, "seconds": self.seconds,
                 "total_seconds": round(sum(self.seconds.values()), 3),
-                "poses": self.poses, "plan": self.plan, "arm": self.arm, "seen": self.seen, "candidates": self.candidates,
+                "poses": self.poses, "plan": self.plan, "motion": self.motion, "arm": self.arm, "seen": self.seen, "candidates": self.candidates,
                 "attempts": self.attempts, "look": self.look, "hole": self.hole, "notes": self.notes, **self.info}
 
 

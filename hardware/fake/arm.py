@@ -61,6 +61,7 @@ class FakeArm(StopState, Arm):
         self.interruptions: list[Interruption] = []
         self.after_motion: list[Callable[[Motion, bool], None]] = []  # (motion, arrived) after each one
         self.stops = 0  # stopJ calls
+        self.clock = 0.0  # s: each motion advances it by its nominal duration (`getTimestamp`)
         self._stopped, self._teach, self._detecting, self._contact = False, False, False, False
         self._last_error = ""
 
@@ -81,6 +82,10 @@ class FakeArm(StopState, Arm):
     def getActualQd(self) -> np.ndarray:
         return np.zeros(6)
 
+    def getTimestamp(self) -> float:
+        self.require_connected()
+        return self.clock
+
     def getForwardKinematics(self, q: np.ndarray | None = None) -> np.ndarray:
         return pose_to_ur(self.kinematics.fk(self.getActualQ() if q is None else np.asarray(q, float)))
 
@@ -94,7 +99,8 @@ class FakeArm(StopState, Arm):
         return pose_to_ur(self.kinematics.T_tool0_tcp)
 
     def moveJ(self, q: np.ndarray, speed: float = 1.05, acceleration: float = 1.4) -> bool:
-        return self._move("moveJ", np.array([self.getActualQ(), np.asarray(q, float)]))
+        path = np.array([self.getActualQ(), np.asarray(q, float)])
+        return self._move("moveJ", path, float(np.abs(path[1] - path[0]).max()) / speed)
 
     def moveL(self, pose: np.ndarray, speed: float = 0.25, acceleration: float = 1.2) -> bool:
         T0, T1 = self.kinematics.fk(self.getActualQ()), ur_to_pose(pose)
@@ -105,13 +111,13 @@ class FakeArm(StopState, Arm):
                 self._last_error = f"moveL: no IK solution at {100 * s:.0f}% of the line"
                 return False
             path.append(q)
-        return self._move("moveL", np.array(path))
+        return self._move("moveL", np.array(path), float(np.linalg.norm(T1[:3, 3] - T0[:3, 3])) / speed)
 
     def executeTrajectory(self, times: np.ndarray, q: np.ndarray, qd: np.ndarray | None = None) -> bool:
         q = np.asarray(q, float)
         if np.abs(q[0] - self.getActualQ()).max() > 0.01:
             raise ValueError("trajectory does not start at the arm's current joint positions")
-        return self._move("executeTrajectory", q)
+        return self._move("executeTrajectory", q, float(times[-1] - times[0]))
 
     def stopJ(self, deceleration: float = 2.0) -> None:
         self.require_connected()
@@ -142,8 +148,9 @@ class FakeArm(StopState, Arm):
     def isTeachMode(self) -> bool:
         return self._teach
 
-    def _move(self, verb: str, path: np.ndarray) -> bool:
-        """Go along the joint path (K, 6) at once, or stop where the first matching interruption says."""
+    def _move(self, verb: str, path: np.ndarray, seconds: float) -> bool:
+        """Go along the joint path (K, 6) at once, or stop where the first matching interruption says; the
+        clock advances by the motion's nominal `seconds` (its share of them when stopped)."""
         self.require_connected()
         if self._stopped:
             raise ProtectiveStopError("arm is in a protective stop; call unlockProtectiveStop() first")
@@ -153,6 +160,7 @@ class FakeArm(StopState, Arm):
         motion = Motion(len(self.motions) + 1, verb, path[0].copy(), path[-1].copy(), self._detecting)
         self.motions.append(motion)
         stop = next((i for i in self.interruptions if i.when(motion)), None)
+        self.clock += seconds * (1.0 if stop is None else stop.at)
         if stop is None:
             self.q = path[-1].copy()
         else:

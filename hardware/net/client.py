@@ -178,6 +178,9 @@ class NetArm(_NetDevice, Arm):
     def getActualQd(self) -> np.ndarray:
         return np.asarray(self._call("getActualQd"), float)
 
+    def getTimestamp(self) -> float:
+        return float(self._call("getTimestamp"))
+
     def getActualTCPPose(self) -> np.ndarray:
         return np.asarray(self._call("getActualTCPPose"), float)
 

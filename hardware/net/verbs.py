@@ -62,6 +62,7 @@ def arm_verbs(arm: Arm) -> dict[str, Verb]:
     return {
         "getActualQ": Verb(lambda a, _: a.getActualQ()),
         "getActualQd": Verb(lambda a, _: a.getActualQd()),
+        "getTimestamp": Verb(lambda a, _: a.getTimestamp()),
         "getActualTCPPose": Verb(lambda a, _: a.getActualTCPPose()),
         "getTCPOffset": Verb(lambda a, _: a.getTCPOffset()),
         "isProtectiveStopped": Verb(lambda a, _: a.isProtectiveStopped()),

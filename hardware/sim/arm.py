@@ -94,6 +94,10 @@ class SimArm(StopState, Arm):
         self.require_connected()
         return self.robot.arm_state()[1]
 
+    def getTimestamp(self) -> float:
+        self.require_connected()
+        return self.robot.world.time
+
     def getForwardKinematics(self, q: np.ndarray | None = None) -> np.ndarray:
         q = self.getActualQ() if q is None else np.asarray(q, dtype=np.float64)
         return pose_to_ur(self.robot.kinematics.fk(q))
