@@ -28,11 +28,11 @@ class MotionConfig:
     pivot_lever: float = 0.065  # m: a held object's centroid this far from the fingers' axis or farther: the planner's full
     # search for a carry that keeps it from pivoting, else a short one:
     short_lever_search: int = 1_200  # states of constrained search for an object held nearer its centroid (about 0.2 s)
-    joint_speed: float = 1.05  # rad/s on transits (ur_rtde's moveJ default)
-    joint_acceleration: float = 1.4  # rad/s^2
-    line_speed: float = 0.15  # m/s on straight lines
-    line_acceleration: float = 0.6  # m/s^2
-    line_jerk: float = 5.0  # m/s^3
+    joint_speed: float = 2.0  # rad/s on transits: 63 % of the UR5's 3.15 (ur_rtde's moveJ default is 1.05)
+    joint_acceleration: float = 4.0  # rad/s^2: half the base joints' 8 (docs/decisions.md, "Speeds")
+    line_speed: float = 0.25  # m/s on straight lines (ur_rtde's moveL default)
+    line_acceleration: float = 1.2  # m/s^2 (ur_rtde's moveL default)
+    line_jerk: float = 20.0  # m/s^3: at 5, a 10 cm line never reached its speed (0.86 s instead of 0.6)
     check_every: int = 5  # collision-check every n-th transit sample (20 ms at 250 Hz)
     end_tolerance: float = 0.02  # rad: a segment that ends farther than this from its target failed
     ik_candidates: int = 8  # IK branches tried at the grasp and at the place before giving up (all of them)
