@@ -7,6 +7,18 @@ def rng() -> np.random.Generator:
     return np.random.default_rng(1234)
 
 
+@pytest.fixture(scope="session")
+def true_calibration(tmp_path_factory):
+    """A calibration file holding the simulated camera's true pose, for end-to-end tests whose subject
+    is not the calibration (that is tested on its own, tests/test_cli.py): each would calibrate first."""
+    from app.simcell.cell import CellConfig, SimCell
+    from calibration.store import save_calibration
+
+    with SimCell(CellConfig()) as cell:
+        return save_calibration(tmp_path_factory.mktemp("calibration") / "calibration.json",
+                                np.array(cell.camera.config.T_base_cam), {})
+
+
 @pytest.fixture
 def nift_cache(tmp_path, monkeypatch):
     """A private, empty cache directory so collision models are really computed."""

@@ -56,16 +56,12 @@ def test_make_data_killed_at_random_moments(tmp_path):
     assert data.manifest["complete"] and len(data.manifest["shards"]) == 3 and not list(out.glob("*.tmp*"))
 
 
-def test_teach_killed_at_random_moments_loses_no_demo(tmp_path):
+def test_teach_killed_at_random_moments_loses_no_demo(tmp_path, true_calibration):
     from app.tasks.demo_library import task_demos, task_templates
     from app.tasks.staging import leftovers, recover
     from app.tasks.task import task
 
-    from app.simcell.cell import CellConfig, SimCell
-    from calibration.store import save_calibration
-
-    with SimCell(CellConfig()) as cell:  # the camera's true pose: calibration is tested on its own
-        calibration = save_calibration(tmp_path / "calibration.json", np.array(cell.camera.config.T_base_cam), {})
+    calibration = true_calibration
     out = tmp_path / "mug"
     shutil.copytree(ROOT / "demos" / "mug", out)
     before = digest(out)

@@ -125,7 +125,7 @@ def test_an_imported_mug_stands_on_the_table_and_the_teacher_refuses_it(imported
 
 
 @pytest.mark.slow
-def test_import_then_run_and_bench_by_name_from_the_command_line(tmp_path, mug_scan):
+def test_import_then_run_and_bench_by_name_from_the_command_line(tmp_path, mug_scan, true_calibration):
     """`nift objects import`, `nift run --object`, `nift bench --objects` as a user types them."""
     _, path = mug_scan
     env = {"NIFT_OBJECTS": str(tmp_path / "lib"), "PATH": "/usr/bin:/bin"}
@@ -141,7 +141,7 @@ def test_import_then_run_and_bench_by_name_from_the_command_line(tmp_path, mug_s
     assert imported.returncode == 0, imported.stderr
     assert json.loads(imported.stdout)["units"] == "mm"
     assert "scan-mug" in cli("objects", "list").stdout
-    job = cli("run", "--task", "mug", "--object", "scan-mug", "--calibration", str(tmp_path / "cal.json"), "--json")
+    job = cli("run", "--task", "mug", "--object", "scan-mug", "--calibration", str(true_calibration), "--json")
     record = json.loads(job.stdout)
     assert record["object"] == "scan-mug" and record["scale"] == 1.0 and record["failed_stage"] != "imitate"
     bench = cli("bench", "--tasks", "mug", "--objects", "scan-mug", "--trials", "2", "--methods", "ibs-nif",
