@@ -89,11 +89,12 @@ class Planner:
 
     def transit(self, q0: np.ndarray, q1: np.ndarray, label: str, ignore: tuple[str, ...] = (),
                 allowed: Callable[[np.ndarray], bool] | None = None,
-                search: SamplingConfig | None = None) -> JointTrajectory:
+                search: SamplingConfig | None = None, held: bool = False) -> JointTrajectory:
         """A collision-free chain of Ruckig joint motions q0 -> q1: the direct one, else through the
         waypoints of the sampling planner (`app.motion.sampling`); `allowed`: a path constraint on
-        every state (`held_without_pivot`); `search`: the planner's settings (the configured ones when None)."""
-        direct = self._timed(np.array([q0, q1]), label)
+        every state (`held_without_pivot`); `search`: the planner's settings (the configured ones when None);
+        `held`: the object is in the fingers (timed at the carry's speed)."""
+        direct = self._timed(np.array([q0, q1]), label, held=held)
         hits = self._collisions(direct, ignore, allowed)
         if not hits:
             return direct
@@ -104,7 +105,7 @@ class Planner:
         dense = densify(waypoints, self.config.sampling.max_step / 2)
         # last, on the very segments the planner checked (docs/decisions.md)
         for path, straight in ((waypoints, False), (dense, False), (waypoints, True)):
-            traj = self._timed(path, label, straight)
+            traj = self._timed(path, label, straight, held)
             if not self._collisions(traj, ignore, allowed):
                 return traj
         raise PathCollides(f"{label}: the sampled joint path collides once timed ({', '.join(hits[:3])} on the direct one)")
@@ -121,9 +122,9 @@ class Planner:
         search = replace(self.config.sampling, states=self.config.short_lever_search) if short else None
         try:
             return self.transit(q0, q1, "carry", ignore, held_without_pivot(self.kin, q0, q1, self.config.carry_pivot),
-                                search), True
+                                search, held=True), True
         except PlanningFailure:
-            return self.transit(q0, q1, "carry", ignore), short
+            return self.transit(q0, q1, "carry", ignore, held=True), short
 
     def held_lever(self, T_base_grasp: np.ndarray) -> float:
         """How far (m) the observed object's centroid lies from the fingers' axis (the tool's y through
@@ -134,10 +135,12 @@ class Planner:
         r = transform_points(invert(T_base_grasp), solid.mean(axis=0, keepdims=True))[0]  # (3,) TCP frame
         return float(np.hypot(r[0], r[2]))
 
-    def _timed(self, waypoints: np.ndarray, label: str, straight: bool = False) -> JointTrajectory:
-        """Ruckig rest-to-rest segments through joint waypoints (K, 6); `straight`: phase-synchronised."""
-        return through_waypoints(list(waypoints), self.limits, self.config.joint_speed, self.config.joint_acceleration,
-                                 label, straight)
+    def _timed(self, waypoints: np.ndarray, label: str, straight: bool = False, held: bool = False) -> JointTrajectory:
+        """Ruckig rest-to-rest segments through joint waypoints (K, 6); `straight`: phase-synchronised;
+        `held`: at the carry's speed and acceleration."""
+        c = self.config
+        speed, acceleration = (c.carry_speed, c.carry_acceleration) if held else (c.joint_speed, c.joint_acceleration)
+        return through_waypoints(list(waypoints), self.limits, speed, acceleration, label, straight)
 
     def line(self, q0: np.ndarray, T1: np.ndarray, label: str, ignore: tuple[str, ...] = (),
              into_contact: bool = False) -> JointTrajectory:
@@ -286,7 +289,7 @@ class Planner:
     def _collisions(self, traj: JointTrajectory, ignore: tuple[str, ...],
                     allowed: Callable[[np.ndarray], bool] | None = None) -> list[str]:
         """What the timed motion hits (or 'path constraint' where `allowed` refuses a state); [] if nothing."""
-        for q in [*traj.q[:: self.config.check_every], traj.end]:
+        for q in [*checked_samples(traj.q, self.config.check_step), traj.end]:
             if hits := self.scene.collisions(q, ignore):
                 return hits
             if allowed is not None and not allowed(q):
@@ -322,6 +325,17 @@ def held_without_pivot(kin: UR5Kinematics, q0: np.ndarray, q1: np.ndarray, extra
 
     limit = max(swing(q1), 2.0 * np.sin(np.radians(extra) / 2.0)) + 1e-9
     return lambda q: bool(swing(q) <= limit)
+
+
+def checked_samples(q: np.ndarray, step: float) -> np.ndarray:
+    """The samples of a joint path (K, 6) to collision-check: the first, then each that has moved more
+    than `step` rad on some joint since the last one kept - as dense at any speed."""
+    kept, last = [0], q[0]
+    for i in range(1, len(q)):
+        if np.abs(q[i] - last).max() > step:
+            kept.append(i)
+            last = q[i]
+    return q[kept]
 
 
 def first_that_works(items: list, attempt):
