@@ -32,11 +32,13 @@ class MotionConfig:
     joint_acceleration: float = 4.0  # rad/s^2: half the base joints' 8 (docs/decisions.md, "Speeds")
     carry_speed: float = 1.05  # rad/s on transits holding the object (the carry, the second look's turn)
     carry_acceleration: float = 1.4  # rad/s^2 (faster, lying bottles hit the cell and stopped the arm)
-    line_speed: float = 0.25  # m/s on straight lines away from contact: lift, retreat, clear (ur_rtde's moveL default)
-    contact_line_speed: float = 0.15  # m/s on the lines that end in contact: the approach, the place (a bottle set
-    # down on the shelf at 0.25 fell over)
+    line_speed: float = 0.25  # m/s on the empty gripper's straight lines: retreat, clear (ur_rtde's moveL default)
     line_acceleration: float = 1.2  # m/s^2 (ur_rtde's moveL default)
     line_jerk: float = 20.0  # m/s^3: at 5, a 10 cm line never reached its speed (0.86 s instead of 0.6)
+    gentle_line_speed: float = 0.15  # m/s on the lines that end in contact or hold the object: the approach, the lift,
+    # the place (faster, a bottle set down on the shelf fell over and lying bottles slipped)
+    gentle_line_acceleration: float = 0.6  # m/s^2
+    gentle_line_jerk: float = 5.0  # m/s^3
     check_step: float = 0.02  # rad: a transit is collision-checked wherever a joint has moved this far
     end_tolerance: float = 0.02  # rad: a segment that ends farther than this from its target failed
     ik_candidates: int = 8  # IK branches tried at the grasp and at the place before giving up (all of them)
@@ -55,7 +57,8 @@ RANGES = (("approach_distance", 0.0, 0.5, "m", False), ("approach_cone", 0.0, 90
           ("retreat_distance", 0.0, 0.5, "m", False), ("carry_pivot", 0.0, 180.0, "degrees", True),
           ("pivot_lever", 0.0, 1.0, "m", True), ("short_lever_search", 1, 1_000_000, "states", True),
           ("joint_speed", 0.0, 3.15, "rad/s", False), ("joint_acceleration", 0.0, 40.0, "rad/s^2", False),
-          ("line_speed", 0.0, 1.0, "m/s", False), ("contact_line_speed", 0.0, 1.0, "m/s", False), ("line_acceleration", 0.0, 10.0, "m/s^2", False),
+          ("line_speed", 0.0, 1.0, "m/s", False), ("gentle_line_speed", 0.0, 1.0, "m/s", False),
+          ("gentle_line_acceleration", 0.0, 10.0, "m/s^2", False), ("gentle_line_jerk", 0.0, 100.0, "m/s^3", False), ("line_acceleration", 0.0, 10.0, "m/s^2", False),
           ("line_jerk", 0.0, 100.0, "m/s^3", False), ("check_step", 0.0, 0.5, "rad", False),
           ("carry_speed", 0.0, 3.15, "rad/s", False), ("carry_acceleration", 0.0, 40.0, "rad/s^2", False),
           ("end_tolerance", 0.0, 0.5, "rad", False), ("ik_candidates", 1, 8, "branches", True))

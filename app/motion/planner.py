@@ -143,14 +143,18 @@ class Planner:
         return through_waypoints(list(waypoints), self.limits, speed, acceleration, label, straight)
 
     def line(self, q0: np.ndarray, T1: np.ndarray, label: str, ignore: tuple[str, ...] = (),
-             into_contact: bool = False) -> JointTrajectory:
-        """A straight TCP line from FK(q0) to T1, timed under the joint limits; `into_contact`: a line that
-        ends on the object or the fixture (the approach, the place) runs at `contact_line_speed`."""
+             gentle: bool = False) -> JointTrajectory:
+        """A straight TCP line from FK(q0) to T1, timed under the joint limits; `gentle`: a line that ends
+        in contact or holds the object (the approach, the lift, the place) runs at the `gentle_line_*`
+        profile."""
         T0 = self.kin.fk(q0)
         path = line_path(self.kin, T0, T1, q0, self.scene, ignore, label)
         c = self.config
-        speed = c.contact_line_speed if into_contact else c.line_speed
-        return path_timing(path, line_length(T0, T1), self.limits, speed, c.line_acceleration, c.line_jerk, label)
+        if gentle:
+            profile = (c.gentle_line_speed, c.gentle_line_acceleration, c.gentle_line_jerk)
+        else:
+            profile = (c.line_speed, c.line_acceleration, c.line_jerk)
+        return path_timing(path, line_length(T0, T1), self.limits, *profile, label)
 
     def pick_place(self, q_start: np.ndarray, T_base_grasp: np.ndarray, T_base_place: np.ndarray | None,
                    place_direction: np.ndarray | None, widths: FingerWidths | None = None) -> PickPlacePlan:
@@ -195,9 +199,9 @@ class Planner:
 
         def grasp_lines(q: np.ndarray):
             with self.scene.fingers(widths.held):
-                lift = self._first_line(q, lifts, "lift")  # shorter lifts: the carry that follows is checked
+                lift = self._first_line(q, lifts, "lift", gentle=True)  # shorter lifts: the carry that follows is checked
             with self.scene.fingers(widths.approach):
-                return reverse(self._first_line(q, approaches, "approach", into_contact=True)), lift
+                return reverse(self._first_line(q, approaches, "approach", gentle=True)), lift
 
         # IK at the ends of the lines first: they decide the configuration each line runs in
         with self.scene.fingers(widths.approach):
@@ -230,7 +234,7 @@ class Planner:
 
         def place_lines(q: np.ndarray, T_pre_place: np.ndarray):
             with self.scene.fingers(held):
-                place = reverse(self.line(q, T_pre_place, "place", (OBJECT,), into_contact=True))
+                place = reverse(self.line(q, T_pre_place, "place", (OBJECT,), gentle=True))
             with self.scene.fingers(released):  # a retreat that leaves no way up is no retreat
                 return place, *self._retreat_and_clear(q, T_place)
 
@@ -278,9 +282,9 @@ class Planner:
             return [retreat, clear, self.transit(clear.end, np.asarray(self.config.home_q), "home", ignore=(OBJECT,))]
 
     def _first_line(self, q: np.ndarray, targets: list[np.ndarray], label: str,
-                    into_contact: bool = False) -> JointTrajectory:
+                    gentle: bool = False) -> JointTrajectory:
         """The line from FK(q) to the first target it can follow (the default first, then the alternatives)."""
-        return first_that_works(targets, lambda T: self.line(q, T, label, (OBJECT,), into_contact))
+        return first_that_works(targets, lambda T: self.line(q, T, label, (OBJECT,), gentle))
 
     def _first(self, candidates: list[np.ndarray], plan_lines):
         """plan_lines(q) for the first IK candidate (of at most `ik_candidates`) whose lines work."""
