@@ -246,7 +246,7 @@ def _pick(job: JobContext, plan, planner: Planner) -> None:
         lift = plan.segment("lift")
         if short:  # closed a few mm short of the grasp: the same lift, from there
             with job.scene.fingers(plan.widths.held if plan.widths else job.gripper.width):
-                lift = planner.line(job.arm.getActualQ(), job.kin.fk(lift.end), "lift", (OBJECT,), gentle=True)
+                lift = planner.line(job.arm.getActualQ(), job.kin.fk(lift.end), "lift", (OBJECT,))
         execute(job.arm, lift, tolerance)
         check_held(job.gripper, "lift")
 
