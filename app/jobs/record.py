@@ -65,7 +65,8 @@ class JobResult:
         return {"task": self.task, "method": self.method, "success": self.success, "failed_stage": self.failed_stage,
                 "failure_kind": self.failure_kind, "reason": self.reason, "seconds": self.seconds,
                 "total_seconds": round(sum(self.seconds.values()), 3),
-                "poses": self.poses, "plan": self.plan, "motion": self.motion, "arm": self.arm, "seen": self.seen, "candidates": self.candidates,
+                "poses": self.poses, "plan": self.plan, "motion": self.motion, "arm": self.arm, "seen": self.seen,
+                "candidates": self.candidates,
                 "attempts": self.attempts, "look": self.look, "hole": self.hole, "notes": self.notes, **self.info}
 
 
