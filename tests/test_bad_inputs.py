@@ -1,10 +1,11 @@
-"""A corpus of bad inputs across the verbs, each run as a subprocess the way a user runs `nift`:
-exit code 2, exactly one line on stderr that names the input, and the working directory left
-exactly as it was (no file written, none removed, no temp file, no empty folder)."""
+"""A corpus of bad inputs across the verbs, each run as its own `nift` process (forked from one that
+imported the CLI once: tests/cli_forkserver.py): exit code 2, exactly one line on stderr that names
+the input, and the working directory left exactly as it was (no file written, none removed, no temp
+file, no empty folder). One case also runs as the installed `nift` script, the way a user starts it."""
+import json
 import os
 import subprocess
 import sys
-from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import pytest
@@ -23,6 +24,28 @@ def run_case(args: tuple[str, ...], cwd: Path, env: dict) -> subprocess.Complete
     return subprocess.run([*cmd, *args], cwd=cwd, capture_output=True, text=True, timeout=300, env=env)
 
 
+def run_forked(cases: list, root: Path, env: dict) -> list[subprocess.CompletedProcess]:
+    """Each case (args, named, cwd, snapshot) run by the fork server; its exit code, stdout and stderr."""
+    out = root / "outputs"
+    out.mkdir()
+    jobs = [{"args": list(args), "cwd": str(cwd), "stdout": str(out / f"{i}.out"), "stderr": str(out / f"{i}.err")}
+            for i, (args, _, cwd, _) in enumerate(cases)]
+    (root / "cases.json").write_text(json.dumps(jobs))
+    server = Path(__file__).with_name("cli_forkserver.py")
+    done = subprocess.run([sys.executable, str(server), str(root / "cases.json"), str(root / "codes.json")],
+                          capture_output=True, text=True, timeout=900, env=env)
+    assert done.returncode == 0, done.stderr[-2000:]
+    codes = json.loads((root / "codes.json").read_text())
+    return [subprocess.CompletedProcess(j["args"], code, Path(j["stdout"]).read_text(), Path(j["stderr"]).read_text())
+            for j, code in zip(jobs, codes)]
+
+
+def test_a_bad_input_to_the_installed_script_is_one_line_and_exit_2(tmp_path):
+    r = run_case(("run", "--task", "teapot"), tmp_path, {**os.environ, "NIFT_LOG_DIR": str(tmp_path / "logs")})
+    assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1 and "--task" in r.stderr
+    assert list(tmp_path.iterdir()) == []
+
+
 def test_the_corpus_is_large_enough_and_covers_the_verbs():
     assert len(CORPUS) >= 60
     verbs = {args[0] for args, _ in CORPUS}
@@ -39,8 +62,7 @@ def test_every_bad_input_ends_in_one_line_naming_it_and_leaves_the_directory_as_
         cwd.mkdir()
         make_inputs(cwd)
         cases.append((args, named, cwd, snapshot(cwd)))
-    with ThreadPoolExecutor(2) as pool:  # two at a time: this machine's cores
-        results = list(pool.map(lambda c: run_case(c[0], c[2], env), cases))
+    results = run_forked(cases, tmp_path, env)
     failures = []
     for (args, named, cwd, before), r in zip(cases, results):
         lines = r.stderr.strip().splitlines()

@@ -28,7 +28,7 @@ def test_the_cases_are_the_held_out_families():
 
 @pytest.mark.slow
 @pytest.mark.parametrize("category, instance, seed", CASES, ids=[f"{c}-{family_of(c, s)}" for c, s, _ in CASES])
-def test_a_held_out_family_mesh_is_imported_and_run_to_success(tmp_path, category, instance, seed):
+def test_a_held_out_family_mesh_is_imported_and_run_to_success(tmp_path, true_calibration, category, instance, seed):
     path = tmp_path / f"{category}.obj"
     generate(category, instance).export(path)
     env = {**os.environ, "NIFT_OBJECTS": str(tmp_path / "lib")}
@@ -40,7 +40,7 @@ def test_a_held_out_family_mesh_is_imported_and_run_to_success(tmp_path, categor
     imported = cli("objects", "import", str(path), "--category", category, "--name", "held-out")
     assert imported.returncode == 0, imported.stderr
     job = cli("run", "--task", category, "--object", "held-out", "--seed", str(seed),
-              "--calibration", str(tmp_path / "cal.json"), "--json")
-    assert job.returncode == 0, job.stderr
+              "--calibration", str(true_calibration), "--json")
     record = json.loads(job.stdout)
     assert record["object"] == "held-out" and record["success"], record["reason"]
+    assert job.returncode == 0, job.stderr

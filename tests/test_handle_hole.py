@@ -7,7 +7,7 @@ from app.nift.raycast import cast, make_scene
 from app.objects import generate, semantics, split
 from app.predict.pairs import Candidate
 from app.predict.feasibility import demo_carries
-from app.predict.handle_hole import find_hole
+from app.predict.handle_hole import HoleConfig, across, find_hole, fit_body, fits
 from app.predict.hole_places import FLIPS, UP, demo_hang, demo_hole, hole_pairs, hole_places, with_hole_pairs
 from app.tasks.demo_library import DEMOS_DIR, task_demos
 from hardware.se3 import invert, make_pose, transform_points
@@ -60,6 +60,33 @@ def test_a_handle_behind_the_mug_gives_no_hole(index):
 def test_a_bowl_has_no_hole():
     bowl = generate("bowl", split("bowl", "test")[0])
     assert find_hole(one_view(bowl, yaw(0.7)), [0.0, 0.0, 1.0], up=UP) is None
+
+
+def side_view(half: float, handle_azimuth: float, radius: float = 0.04, height: float = 0.09, reach: float = 0.03,
+              n: int = 3000, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
+    """Points (M, 3) of one side of a cylindrical body (azimuths within +-half of x) and a handle loop
+    beside it at `handle_azimuth`, as a held mug shows itself to a camera above; and the loop's centre."""
+    rng = np.random.default_rng(seed)
+    a, z = rng.uniform(-half, half, n), rng.uniform(0.0, height, n)
+    body = np.column_stack([radius * np.cos(a), radius * np.sin(a), z])  # (n, 3)
+    u, up = np.array([np.cos(handle_azimuth), np.sin(handle_azimuth), 0.0]), np.array([0.0, 0.0, 1.0])
+    centre = (radius + 0.45 * reach) * u + height / 2 * up
+    t = rng.uniform(0.0, 2 * np.pi, n // 3)
+    loop = centre + (reach / 2 * np.cos(t))[:, None] * u + (0.65 * reach * np.sin(t))[:, None] * up  # (n/3, 3)
+    return np.vstack([body, loop[np.linalg.norm(loop[:, :2], axis=1) > radius + 0.002]]), centre
+
+
+@pytest.mark.parametrize("half,azimuth", [(30, 15), (40, 15), (40, 25), (40, 35)])
+def test_a_shallow_side_view_is_refitted_and_gives_the_hole(half, azimuth):
+    """One side of a body with its handle beside it: the algebraic circle's fit is no body (the case the
+    refit is for), and the refit's hole lies within 5 mm of the loop's centre."""
+    points, centre = side_view(np.radians(half), np.radians(azimuth))
+    q = points - points.mean(axis=0)
+    flat, h = q @ across(UP), q @ UP
+    assert not fits(fit_body(flat, h, HoleConfig()), flat, h, HoleConfig())
+    hole = find_hole(points, [0.0, 0.0, 1.0], up=UP)
+    assert hole is not None
+    assert np.linalg.norm(hole.T[:3, 3] - centre) < 0.005
 
 
 def test_the_hole_moves_with_the_mug():

@@ -725,3 +725,17 @@ def test_an_object_held_near_its_centroid_gets_a_short_search_for_a_carry_that_k
         traj, kept = planner.carry(q0, q1, lever=lever)
         assert budgets[0] == (budget, True) and kept is not noted
         assert np.allclose(traj.q[-1], q1, atol=1e-6)
+
+
+def test_a_transit_is_collision_checked_as_densely_at_any_speed():
+    """checked_samples keeps a sample wherever a joint has moved more than the step since the last kept
+    one: a path sampled four times as finely gives the same checked states."""
+    from app.motion.planner import checked_samples
+
+    coarse = np.zeros((41, 6))
+    coarse[:, 0] = np.linspace(0.0, 1.0, 41)  # 0.025 rad per sample
+    fine = np.zeros((161, 6))
+    fine[:, 0] = np.linspace(0.0, 1.0, 161)  # 0.00625 rad per sample
+    a, b = checked_samples(coarse, 0.02), checked_samples(fine, 0.02)
+    assert np.abs(np.diff(a[:, 0])).max() <= 0.025 + 1e-12 and np.abs(np.diff(b[:, 0])).max() <= 0.025 + 1e-12
+    assert abs(len(a) - len(b)) <= 8 and len(b) >= 1.0 / 0.025

@@ -9,22 +9,23 @@ from collections.abc import Callable
 
 import numpy as np
 
+from app.motion.ik import Blocked
 from app.motion.planner import OBJECT
 from app.motion.scene import PlanningScene
 from app.predict.predict import refine_grasp
-from app.predict.table_clearance import backed_off_table
+from app.predict.palm_clearance import seated
 from hardware.gripper_geometry import GripperGeometry
 
 
 def gripper_clear(scene: PlanningScene, cloud: np.ndarray, table_z: float = 0.0, approach: float = 0.10,
                   center: bool = True, align: bool = False) -> Callable[[np.ndarray], bool]:
-    """Grasp pose (4, 4) -> whether the open gripper there, refined (`center`, `align`) and backed off
-    the table top at `table_z` as the job will do it, hits nothing of the cell (table, fixtures): the
+    """Grasp pose (4, 4) -> whether the open gripper there, refined (`center`, `align`) and seated
+    (`app.predict.palm_clearance.seated`, the table top at `table_z`) as the job will do it, hits nothing of the cell (table, fixtures): the
     imitation's pruning keeps such grasps before others (a grasp from under the table or through it is
     no grasp for a cell); nor may the open gripper pass through the object's seen points on its way
     in along the last `approach` metres (`approach_clear`)."""
     def clear(T_base_tcp: np.ndarray) -> bool:
-        T = backed_off_table(refine_grasp(T_base_tcp, cloud, center=center, align=align), cloud, table_z)
+        T = seated(refine_grasp(T_base_tcp, cloud, center=center, align=align), cloud, table_z)
         return (not scene.gripper_collisions(T, ignore=(OBJECT,))
                 and approach_clear(T, cloud, approach, scene.geometry))
 
@@ -39,3 +40,22 @@ def approach_clear(T_base_tcp: np.ndarray, cloud: np.ndarray, distance: float, g
     coming down on the rim instead of beside it is caught here (it stopped the arm on the line)."""
     local = (np.asarray(cloud, float) - T_base_tcp[:3, 3]) @ T_base_tcp[:3, :3]  # (N, 3) TCP frame
     return not geometry.contains(local, None, margin, sweep=distance).any()
+
+
+def approach_blocked(failure: Callable[[np.ndarray, str], Blocked | None], points: np.ndarray, distance: float,
+                     width: Callable[[np.ndarray], float], geometry: GripperGeometry,
+                     arrived: float) -> Callable[[np.ndarray, str], Blocked | None]:
+    """The quick test `failure(T, what)` and then, at a grasp, the way in checked against the seen points
+    (N, 3): the gripper, its fingers `width(T)` apart, may meet none of them along the last `distance`
+    metres of the approach until `arrived` metres before the grasp (a contact that close is the grasp,
+    as the guarded approach takes it); else it would stop on the line, or press on into a stop."""
+    def blocked(T_base_tcp: np.ndarray, what: str = "pose") -> Blocked | None:
+        if (why := failure(T_base_tcp, what)) or what != "grasp":
+            return why
+        local = (points - T_base_tcp[:3, 3]) @ T_base_tcp[:3, :3]  # (N, 3) TCP frame
+        local[:, 2] += arrived  # the same points seen from `arrived` back along the tool axis
+        if n := int(geometry.contains(local, width(T_base_tcp), 0.0, sweep=distance).sum()):
+            return Blocked(f"the gripper's way in to the grasp passes through {n} seen points of the object")
+        return None
+
+    return blocked

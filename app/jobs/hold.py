@@ -3,7 +3,7 @@
 
 Before the plan, each candidate's grasp is judged on the cloud the camera saw. A grasp that would
 slide out is tried again moved down its pad plane by `HoldConfig.moves` (off a cap that narrows to
-the top, onto the neck or the body); when no move holds, it is ruled out and the record says why.
+the top, onto the neck or the body), no farther than the palm stays clear of the cloud; when no move holds, it is ruled out and the record says why.
 After a slip, grasps within `HoldConfig.slip_away` of the slipped one are ruled out too. Positions on
 the object are compared in the cloud's principal-axis frame - the position along the longest axis, of
 either sign, and the distance from it - so the object may have fallen, turned about its axis, or
@@ -18,6 +18,7 @@ import numpy as np
 from app.jobs.choice import describe
 from app.predict.grasp_hold import Hold, HoldConfig, judge_hold, moved_down
 from app.predict.pairs import Candidate
+from app.predict.palm_clearance import palm_overlap
 
 
 def object_axis(cloud: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -72,6 +73,8 @@ def _holding_grasp(T: np.ndarray, cloud: np.ndarray, eye: np.ndarray | None, con
         return T, first.reason, False
     for distance in config.moves:
         moved = moved_down(T, distance)
+        if palm_overlap(moved, cloud, 0.0) > 0.0:  # the palm would be on what it holds: no deeper
+            break
         if _nearest_slip(moved, axis, slips) >= config.slip_away and judge_hold(moved, cloud, config, eye=eye).holds:
             return moved, f"moved {1000 * distance:.0f} mm down: " + (first.reason if near >= config.slip_away
                                                                       else "away from a grasp that slipped"), False

@@ -33,7 +33,7 @@ from app.failures import (INTERNAL_ERROR, CellFailure, GraspMissed, GraspSlipped
                           ReleaseJammed)
 from app.jobs.check import sighting
 from app.jobs.choice import choose, describe
-from app.jobs.clearance import gripper_clear
+from app.jobs.clearance import approach_blocked, gripper_clear
 from app.jobs.context import JobContext, Placer, Predictor
 from app.jobs.guarded import guarded_leave, guarded_line, guarded_place, guarded_set_down
 from app.jobs.held_place import look_and_place
@@ -52,7 +52,7 @@ from app.predict.pairs import Candidate
 from app.predict.grasp_centering import held_width
 from app.predict.hole_places import with_hole_pairs
 from app.predict.predict import Prediction, predict, predict_place
-from app.predict.table_clearance import backed_off_table
+from app.predict.palm_clearance import seated
 from app.predict.turned_grasps import turned_pairs
 from app.tasks.task import Task
 from hardware.interfaces import Arm, DepthCamera, Gripper
@@ -182,11 +182,12 @@ def _holding(job: JobContext, options: list, slips: list[np.ndarray]) -> list:
 
 
 def _imitate(job: JobContext, cloud: np.ndarray) -> list:
-    """The predictor's candidate pairs, best first, their grasps backed off the table
-    (`app.predict.table_clearance`); the best one's poses go in the record at once."""
+    """The predictor's candidate pairs, best first, their grasps seated as the cell makes them (off the
+    table and off what lies under the palm: `app.predict.palm_clearance.seated`); the best one's poses go
+    in the record at once."""
     with job.stage("imitate"):
         pred = job.predictor(cloud)
-        options = [replace(c, T_base_tcp=backed_off_table(c.T_base_tcp, cloud, job.config.table_z))
+        options = [replace(c, T_base_tcp=seated(c.T_base_tcp, cloud, job.config.table_z))
                    for c in pred.options()]
         if job.looks_for_hole():
             options, job.result.hole = with_hole_pairs(options, job.points, job.hang)
@@ -206,7 +207,9 @@ def _plan(job: JobContext, planner: Planner, options: list, cloud: np.ndarray):
         options = [replace(c, T_base_fixture=T_above) for c in options]
     with job.stage("plan"):
         q = job.arm.getActualQ()
-        failure = reach_failure(job.kin, job.scene, q, ignore=(OBJECT,))
+        failure = approach_blocked(reach_failure(job.kin, job.scene, q, ignore=(OBJECT,)), job.points,
+                                   job.config.motion.approach_distance, lambda T: widths(T).approach,
+                                   job.scene.geometry, APPROACH_ARRIVED)
         try:
             choice = choose(planner, options, q, job.place_line(cloud), failure,
                             job.config.most_plans, widths, pick_only=job.placer is not None)
@@ -246,7 +249,7 @@ def _pick(job: JobContext, plan, planner: Planner) -> None:
         lift = plan.segment("lift")
         if short:  # closed a few mm short of the grasp: the same lift, from there
             with job.scene.fingers(plan.widths.held if plan.widths else job.gripper.width):
-                lift = planner.line(job.arm.getActualQ(), job.kin.fk(lift.end), "lift", (OBJECT,))
+                lift = planner.line(job.arm.getActualQ(), job.kin.fk(lift.end), "lift", (OBJECT,), gentle=True)
         execute(job.arm, lift, tolerance)
         check_held(job.gripper, "lift")
 

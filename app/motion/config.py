@@ -28,12 +28,18 @@ class MotionConfig:
     pivot_lever: float = 0.065  # m: a held object's centroid this far from the fingers' axis or farther: the planner's full
     # search for a carry that keeps it from pivoting, else a short one:
     short_lever_search: int = 1_200  # states of constrained search for an object held nearer its centroid (about 0.2 s)
-    joint_speed: float = 1.05  # rad/s on transits (ur_rtde's moveJ default)
-    joint_acceleration: float = 1.4  # rad/s^2
-    line_speed: float = 0.15  # m/s on straight lines
-    line_acceleration: float = 0.6  # m/s^2
-    line_jerk: float = 5.0  # m/s^3
-    check_every: int = 5  # collision-check every n-th transit sample (20 ms at 250 Hz)
+    joint_speed: float = 2.0  # rad/s on transits: 63 % of the UR5's 3.15 (ur_rtde's moveJ default is 1.05)
+    joint_acceleration: float = 4.0  # rad/s^2: half the base joints' 8 (docs/decisions.md, "Speeds")
+    carry_speed: float = 1.05  # rad/s on transits holding the object (the carry, the second look's turn)
+    carry_acceleration: float = 1.4  # rad/s^2 (faster, lying bottles hit the cell and stopped the arm)
+    line_speed: float = 0.25  # m/s on the empty gripper's straight lines: retreat, clear (ur_rtde's moveL default)
+    line_acceleration: float = 1.2  # m/s^2 (ur_rtde's moveL default)
+    line_jerk: float = 20.0  # m/s^3: at 5, a 10 cm line never reached its speed (0.86 s instead of 0.6)
+    gentle_line_speed: float = 0.15  # m/s on the lines that end in contact or hold the object: the approach, the lift,
+    # the place (faster, a bottle set down on the shelf fell over and lying bottles slipped)
+    gentle_line_acceleration: float = 0.6  # m/s^2
+    gentle_line_jerk: float = 5.0  # m/s^3
+    check_step: float = 0.02  # rad: a transit is collision-checked wherever a joint has moved this far
     end_tolerance: float = 0.02  # rad: a segment that ends farther than this from its target failed
     ik_candidates: int = 8  # IK branches tried at the grasp and at the place before giving up (all of them)
     home_q: tuple[float, ...] = tuple(HOME_Q)
@@ -41,7 +47,7 @@ class MotionConfig:
     sampling: SamplingConfig = SamplingConfig()
 
     def __post_init__(self) -> None:
-        check_integers(self, ("short_lever_search", "check_every", "ik_candidates"))
+        check_integers(self, ("short_lever_search", "ik_candidates"))
         check_ranges(self, RANGES)
 
 
@@ -51,6 +57,8 @@ RANGES = (("approach_distance", 0.0, 0.5, "m", False), ("approach_cone", 0.0, 90
           ("retreat_distance", 0.0, 0.5, "m", False), ("carry_pivot", 0.0, 180.0, "degrees", True),
           ("pivot_lever", 0.0, 1.0, "m", True), ("short_lever_search", 1, 1_000_000, "states", True),
           ("joint_speed", 0.0, 3.15, "rad/s", False), ("joint_acceleration", 0.0, 40.0, "rad/s^2", False),
-          ("line_speed", 0.0, 1.0, "m/s", False), ("line_acceleration", 0.0, 10.0, "m/s^2", False),
-          ("line_jerk", 0.0, 100.0, "m/s^3", False), ("check_every", 1, 100, "samples", True),
+          ("line_speed", 0.0, 1.0, "m/s", False), ("gentle_line_speed", 0.0, 1.0, "m/s", False),
+          ("gentle_line_acceleration", 0.0, 10.0, "m/s^2", False), ("gentle_line_jerk", 0.0, 100.0, "m/s^3", False), ("line_acceleration", 0.0, 10.0, "m/s^2", False),
+          ("line_jerk", 0.0, 100.0, "m/s^3", False), ("check_step", 0.0, 0.5, "rad", False),
+          ("carry_speed", 0.0, 3.15, "rad/s", False), ("carry_acceleration", 0.0, 40.0, "rad/s^2", False),
           ("end_tolerance", 0.0, 0.5, "rad", False), ("ik_candidates", 1, 8, "branches", True))

@@ -89,11 +89,12 @@ class Planner:
 
     def transit(self, q0: np.ndarray, q1: np.ndarray, label: str, ignore: tuple[str, ...] = (),
                 allowed: Callable[[np.ndarray], bool] | None = None,
-                search: SamplingConfig | None = None) -> JointTrajectory:
+                search: SamplingConfig | None = None, held: bool = False) -> JointTrajectory:
         """A collision-free chain of Ruckig joint motions q0 -> q1: the direct one, else through the
         waypoints of the sampling planner (`app.motion.sampling`); `allowed`: a path constraint on
-        every state (`held_without_pivot`); `search`: the planner's settings (the configured ones when None)."""
-        direct = self._timed(np.array([q0, q1]), label)
+        every state (`held_without_pivot`); `search`: the planner's settings (the configured ones when None);
+        `held`: the object is in the fingers (timed at the carry's speed)."""
+        direct = self._timed(np.array([q0, q1]), label, held=held)
         hits = self._collisions(direct, ignore, allowed)
         if not hits:
             return direct
@@ -104,7 +105,7 @@ class Planner:
         dense = densify(waypoints, self.config.sampling.max_step / 2)
         # last, on the very segments the planner checked (docs/decisions.md)
         for path, straight in ((waypoints, False), (dense, False), (waypoints, True)):
-            traj = self._timed(path, label, straight)
+            traj = self._timed(path, label, straight, held)
             if not self._collisions(traj, ignore, allowed):
                 return traj
         raise PathCollides(f"{label}: the sampled joint path collides once timed ({', '.join(hits[:3])} on the direct one)")
@@ -121,9 +122,9 @@ class Planner:
         search = replace(self.config.sampling, states=self.config.short_lever_search) if short else None
         try:
             return self.transit(q0, q1, "carry", ignore, held_without_pivot(self.kin, q0, q1, self.config.carry_pivot),
-                                search), True
+                                search, held=True), True
         except PlanningFailure:
-            return self.transit(q0, q1, "carry", ignore), short
+            return self.transit(q0, q1, "carry", ignore, held=True), short
 
     def held_lever(self, T_base_grasp: np.ndarray) -> float:
         """How far (m) the observed object's centroid lies from the fingers' axis (the tool's y through
@@ -134,18 +135,26 @@ class Planner:
         r = transform_points(invert(T_base_grasp), solid.mean(axis=0, keepdims=True))[0]  # (3,) TCP frame
         return float(np.hypot(r[0], r[2]))
 
-    def _timed(self, waypoints: np.ndarray, label: str, straight: bool = False) -> JointTrajectory:
-        """Ruckig rest-to-rest segments through joint waypoints (K, 6); `straight`: phase-synchronised."""
-        return through_waypoints(list(waypoints), self.limits, self.config.joint_speed, self.config.joint_acceleration,
-                                 label, straight)
+    def _timed(self, waypoints: np.ndarray, label: str, straight: bool = False, held: bool = False) -> JointTrajectory:
+        """Ruckig rest-to-rest segments through joint waypoints (K, 6); `straight`: phase-synchronised;
+        `held`: at the carry's speed and acceleration."""
+        c = self.config
+        speed, acceleration = (c.carry_speed, c.carry_acceleration) if held else (c.joint_speed, c.joint_acceleration)
+        return through_waypoints(list(waypoints), self.limits, speed, acceleration, label, straight)
 
-    def line(self, q0: np.ndarray, T1: np.ndarray, label: str, ignore: tuple[str, ...] = ()) -> JointTrajectory:
-        """A straight TCP line from FK(q0) to T1, timed under the joint limits."""
+    def line(self, q0: np.ndarray, T1: np.ndarray, label: str, ignore: tuple[str, ...] = (),
+             gentle: bool = False) -> JointTrajectory:
+        """A straight TCP line from FK(q0) to T1, timed under the joint limits; `gentle`: a line that ends
+        in contact or holds the object (the approach, the lift, the place) runs at the `gentle_line_*`
+        profile."""
         T0 = self.kin.fk(q0)
         path = line_path(self.kin, T0, T1, q0, self.scene, ignore, label)
         c = self.config
-        return path_timing(path, line_length(T0, T1), self.limits, c.line_speed, c.line_acceleration, c.line_jerk,
-                           label)
+        if gentle:
+            profile = (c.gentle_line_speed, c.gentle_line_acceleration, c.gentle_line_jerk)
+        else:
+            profile = (c.line_speed, c.line_acceleration, c.line_jerk)
+        return path_timing(path, line_length(T0, T1), self.limits, *profile, label)
 
     def pick_place(self, q_start: np.ndarray, T_base_grasp: np.ndarray, T_base_place: np.ndarray | None,
                    place_direction: np.ndarray | None, widths: FingerWidths | None = None) -> PickPlacePlan:
@@ -190,9 +199,9 @@ class Planner:
 
         def grasp_lines(q: np.ndarray):
             with self.scene.fingers(widths.held):
-                lift = self._first_line(q, lifts, "lift")  # shorter lifts: the carry that follows is checked
+                lift = self._first_line(q, lifts, "lift", gentle=True)  # shorter lifts: the carry that follows is checked
             with self.scene.fingers(widths.approach):
-                return reverse(self._first_line(q, approaches, "approach")), lift
+                return reverse(self._first_line(q, approaches, "approach", gentle=True)), lift
 
         # IK at the ends of the lines first: they decide the configuration each line runs in
         with self.scene.fingers(widths.approach):
@@ -225,7 +234,7 @@ class Planner:
 
         def place_lines(q: np.ndarray, T_pre_place: np.ndarray):
             with self.scene.fingers(held):
-                place = reverse(self.line(q, T_pre_place, "place", (OBJECT,)))
+                place = reverse(self.line(q, T_pre_place, "place", (OBJECT,), gentle=True))
             with self.scene.fingers(released):  # a retreat that leaves no way up is no retreat
                 return place, *self._retreat_and_clear(q, T_place)
 
@@ -272,9 +281,10 @@ class Planner:
                 retreat, clear = self._retreat_and_clear(q, T, touching=(fixture,))
             return [retreat, clear, self.transit(clear.end, np.asarray(self.config.home_q), "home", ignore=(OBJECT,))]
 
-    def _first_line(self, q: np.ndarray, targets: list[np.ndarray], label: str) -> JointTrajectory:
+    def _first_line(self, q: np.ndarray, targets: list[np.ndarray], label: str,
+                    gentle: bool = False) -> JointTrajectory:
         """The line from FK(q) to the first target it can follow (the default first, then the alternatives)."""
-        return first_that_works(targets, lambda T: self.line(q, T, label, (OBJECT,)))
+        return first_that_works(targets, lambda T: self.line(q, T, label, (OBJECT,), gentle))
 
     def _first(self, candidates: list[np.ndarray], plan_lines):
         """plan_lines(q) for the first IK candidate (of at most `ik_candidates`) whose lines work."""
@@ -283,7 +293,7 @@ class Planner:
     def _collisions(self, traj: JointTrajectory, ignore: tuple[str, ...],
                     allowed: Callable[[np.ndarray], bool] | None = None) -> list[str]:
         """What the timed motion hits (or 'path constraint' where `allowed` refuses a state); [] if nothing."""
-        for q in [*traj.q[:: self.config.check_every], traj.end]:
+        for q in [*checked_samples(traj.q, self.config.check_step), traj.end]:
             if hits := self.scene.collisions(q, ignore):
                 return hits
             if allowed is not None and not allowed(q):
@@ -319,6 +329,17 @@ def held_without_pivot(kin: UR5Kinematics, q0: np.ndarray, q1: np.ndarray, extra
 
     limit = max(swing(q1), 2.0 * np.sin(np.radians(extra) / 2.0)) + 1e-9
     return lambda q: bool(swing(q) <= limit)
+
+
+def checked_samples(q: np.ndarray, step: float) -> np.ndarray:
+    """The samples of a joint path (K, 6) to collision-check: the first, then each that has moved more
+    than `step` rad on some joint since the last one kept - as dense at any speed."""
+    kept, last = [0], q[0]
+    for i in range(1, len(q)):
+        if np.abs(q[i] - last).max() > step:
+            kept.append(i)
+            last = q[i]
+    return q[kept]
 
 
 def first_that_works(items: list, attempt):

@@ -10,7 +10,10 @@ hole's geometry directly whenever it shows the handle:
    sum_i n_i n_i^T;
 2. the body's surface of revolution: in the plane across a, the circle of centre c whose radius
    changes linearly along the axis, rho(h) = r_0 + k h, fitted robustly to all points
-   (residual e_i = |p_i - c| - rho(h_i), a soft-L1 loss: the handle's points are outliers);
+   (residual e_i = |p_i - c| - rho(h_i), a soft-L1 loss: the handle's points are outliers), from
+   the algebraic circle's start; when that fit is no body (a view of one side is a shallow arc,
+   and the start can lie on its wrong side), from circles all around the points, keeping the fit
+   with the most points on it;
 3. the handle: the points e_i > HANDLE_OFFSET outside the body, at azimuth phi (their circular
    mean); the hole's height h_c is the middle of their height span, and the tube's outer edge
    rho_out the farthest of them within BAND of h_c;
@@ -48,6 +51,8 @@ class HoleConfig:
     radius_range: tuple[float, float] = (0.02, 0.08)  # m: a fit that ends on a bound found no body
     min_on_body: float = 0.4  # of the points must lie within fit_scale of the body's surface
     snap: float = 0.35  # rad: an axis this close to the table's normal (`up`) is taken to be it
+    restart_radii: tuple[float, ...] = (0.03, 0.045, 0.06)  # m: the refit's starting radii (`refit_body`)
+    restart_azimuths: int = 8  # starting centres per radius, around the points' centroid
 
 
 @dataclass(frozen=True)
@@ -87,17 +92,43 @@ def kasa_circle(flat: np.ndarray) -> tuple[np.ndarray, float]:
     return sol[:2], float(np.sqrt(max(sol[2] + sol[:2] @ sol[:2], 0.0)))
 
 
-def fit_body(flat: np.ndarray, h: np.ndarray, config: "HoleConfig") -> np.ndarray:
+def fit_body_from(flat: np.ndarray, h: np.ndarray, config: "HoleConfig", centre: np.ndarray,
+                  radius: float) -> np.ndarray:
     """The body x (`body_residuals`) fitted with a soft-L1 loss (the handle's points are outliers),
-    radius bounded to config.radius_range, from an algebraic circle's start (`kasa_circle`)."""
-    centre, radius = kasa_circle(flat)
+    radius bounded to config.radius_range, from a circle of `centre` (2,) and `radius`."""
     lo, hi = config.radius_range
-    r0 = float(np.clip(radius, lo, hi))
     c = centre if np.linalg.norm(centre) < hi else np.zeros(2)
     bounds = ([-hi, -hi, lo, -1.0], [hi, hi, hi, 1.0])
-    start = np.clip([*c, r0, 0.0], bounds[0], bounds[1])
+    start = np.clip([*c, float(np.clip(radius, lo, hi)), 0.0], bounds[0], bounds[1])
     return least_squares(body_residuals, start, args=(flat, h), bounds=bounds, loss="soft_l1",
                          f_scale=config.fit_scale).x
+
+
+def fit_body(flat: np.ndarray, h: np.ndarray, config: "HoleConfig") -> np.ndarray:
+    """The body x fitted from an algebraic circle's start (`kasa_circle`)."""
+    return fit_body_from(flat, h, config, *kasa_circle(flat))
+
+
+def on_body(x: np.ndarray, flat: np.ndarray, h: np.ndarray, config: "HoleConfig") -> float:
+    """The fraction of the points within config.fit_scale of the body x's surface."""
+    return float((np.abs(body_residuals(x, flat, h)) < config.fit_scale).mean())
+
+
+def fits(x: np.ndarray, flat: np.ndarray, h: np.ndarray, config: "HoleConfig") -> bool:
+    """Whether the body x is one: its radius inside the range (not on a bound) and enough points on it."""
+    lo, hi = config.radius_range
+    return lo < x[2] < hi and on_body(x, flat, h, config) >= config.min_on_body
+
+
+def refit_body(flat: np.ndarray, h: np.ndarray, config: "HoleConfig") -> np.ndarray:
+    """The body x with the most points on it among fits started from circles around the points'
+    centroid (config.restart_radii x config.restart_azimuths): a view of one side of a body is a
+    shallow arc, whose algebraic circle can lie on the wrong side of it."""
+    mid = flat.mean(axis=0)
+    turns = np.linspace(0.0, 2 * np.pi, config.restart_azimuths, endpoint=False)
+    fitted = [fit_body_from(flat, h, config, mid + r * np.array([np.cos(a), np.sin(a)]), r)
+              for r in config.restart_radii for a in turns]
+    return max(fitted, key=lambda x: on_body(x, flat, h, config))
 
 
 def find_hole(points: np.ndarray, toward: np.ndarray, config: HoleConfig = HoleConfig(),
@@ -117,10 +148,11 @@ def find_hole(points: np.ndarray, toward: np.ndarray, config: HoleConfig = HoleC
     B = across(axis)  # (3, 2)
     flat, h = q @ B, q @ axis  # (M, 2), (M,)
     x = fit_body(flat, h, config)
+    if not fits(x, flat, h, config):
+        x = refit_body(flat, h, config)
+        if not fits(x, flat, h, config):
+            return None  # no body of revolution fits: the handle cannot be told from the rest
     res, rel, base = body_residuals(x, flat, h), flat - x[:2], B @ x[:2]  # (M,), (M, 2) from the axis, (3,)
-    lo, hi = config.radius_range
-    if not lo < x[2] < hi or (np.abs(res) < config.fit_scale).mean() < config.min_on_body:
-        return None  # no body of revolution fits: the handle cannot be told from the rest
     out = res > config.handle_offset  # the handle's points
     if out.sum() < config.min_handle_points:
         return None
