@@ -1,5 +1,12 @@
+import os
+
 import numpy as np
 import pytest
+
+if os.environ.get("PYTEST_XDIST_WORKER"):  # one of the suite's workers (`-n 2`): one core each, for the
+    # worker and the `nift` commands it starts, as the cell runs torch (JobConfig.threads)
+    for name in ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS"):
+        os.environ[name] = "1"
 
 
 @pytest.fixture
