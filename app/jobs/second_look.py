@@ -67,7 +67,8 @@ def second_look(arm: Arm, camera: DepthCamera, planner: Planner, T_base_cam: np.
         q = view_q(start_q, turn, arm.joint_limits)
         if np.abs(q - arm.getActualQ()).max() > tolerance:
             with planner.scene.holding(OBJECT, T_base_grasp), planner.scene.fingers(width):
-                execute(arm, planner.transit(arm.getActualQ(), q, "second look", ignore=(OBJECT,), held=True), tolerance)
+                # the empty arm's speed: a turn of the wrist alone barely swings what it holds (docs/decisions.md)
+                execute(arm, planner.transit(arm.getActualQ(), q, "second look", ignore=(OBJECT,)), tolerance)
         T_view = planner.kin.fk(arm.getActualQ())
         near = transform_points(T_view @ invert(T_base_grasp), first.mean(axis=0, keepdims=True))[0]
         seen = held_object_cloud(camera.capture(), T_base_cam, T_view, width, near, radius, perception,
