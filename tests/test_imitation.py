@@ -60,12 +60,12 @@ def test_moving_the_cloud_moves_the_grasp_the_same_way(demo):
     template, truth = stages["grasp"]
     rng = np.random.default_rng(5)
     good = 0
-    for R in random_rotations(10, rng):
+    for R in random_rotations(6, rng):
         M = make_pose(R, rng.uniform(-0.1, 0.1, 3))
         moved = cloud @ M[:3, :3].T + M[:3, 3]
         dist, angle = errors(imitate(template, moved, ImitationConfig(seed=2)).T, M @ truth)
         good += dist <= 0.01 and angle <= 10.0
-    assert good >= 9
+    assert good >= 5
 
 
 @pytest.mark.parametrize("stage", ["grasp", "place"])
