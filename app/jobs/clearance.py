@@ -15,13 +15,14 @@ from app.motion.scene import PlanningScene
 from app.predict.predict import refine_grasp
 from app.predict.palm_clearance import seated
 from hardware.gripper_geometry import GripperGeometry
+from hardware.se3 import make_pose
 
 
 def gripper_clear(scene: PlanningScene, cloud: np.ndarray, table_z: float = 0.0, approach: float = 0.10,
                   center: bool = True, align: bool = False) -> Callable[[np.ndarray], bool]:
     """Grasp pose (4, 4) -> whether the open gripper there, refined (`center`, `align`) and seated
-    (`app.predict.palm_clearance.seated`, the table top at `table_z`) as the job will do it, hits nothing of the cell (table, fixtures): the
-    imitation's pruning keeps such grasps before others (a grasp from under the table or through it is
+    (`app.predict.palm_clearance.seated`, the table top at `table_z`) as the job will do it, hits nothing
+    of the cell (table, fixtures): the imitation's pruning keeps such grasps before others (a grasp from under the table or through it is
     no grasp for a cell); nor may the open gripper pass through the object's seen points on its way
     in along the last `approach` metres (`approach_clear`)."""
     def clear(T_base_tcp: np.ndarray) -> bool:
@@ -38,8 +39,15 @@ def approach_clear(T_base_tcp: np.ndarray, cloud: np.ndarray, distance: float, g
     `margin`) sweep along the approach line, from `distance` back along the tool axis to T_base_tcp:
     the planning scene lets the approach pass the object's hull (it must, to close on it), so a finger
     coming down on the rim instead of beside it is caught here (it stopped the arm on the line)."""
+    return not approach_hits(T_base_tcp, cloud, distance, geometry, margin=margin)
+
+
+def approach_hits(T_base_tcp: np.ndarray, cloud: np.ndarray, distance: float, geometry: GripperGeometry,
+                  width: float | None = None, margin: float = 0.0) -> int:
+    """How many cloud points (N, 3) lie in the volume the gripper, its fingers `width` apart (None: fully
+    open) and its boxes grown by `margin`, sweeps along the last `distance` metres of its way in to T_base_tcp."""
     local = (np.asarray(cloud, float) - T_base_tcp[:3, 3]) @ T_base_tcp[:3, :3]  # (N, 3) TCP frame
-    return not geometry.contains(local, None, margin, sweep=distance).any()
+    return int(geometry.contains(local, width, margin, sweep=distance).sum())
 
 
 def approach_blocked(failure: Callable[[np.ndarray, str], Blocked | None], points: np.ndarray, distance: float,
@@ -52,9 +60,8 @@ def approach_blocked(failure: Callable[[np.ndarray, str], Blocked | None], point
     def blocked(T_base_tcp: np.ndarray, what: str = "pose") -> Blocked | None:
         if (why := failure(T_base_tcp, what)) or what != "grasp":
             return why
-        local = (points - T_base_tcp[:3, 3]) @ T_base_tcp[:3, :3]  # (N, 3) TCP frame
-        local[:, 2] += arrived  # the same points seen from `arrived` back along the tool axis
-        if n := int(geometry.contains(local, width(T_base_tcp), 0.0, sweep=distance).sum()):
+        short = T_base_tcp @ make_pose(t=[0.0, 0.0, -arrived])  # where the way in may first meet the object
+        if n := approach_hits(short, points, distance, geometry, width(T_base_tcp)):
             return Blocked(f"the gripper's way in to the grasp passes through {n} seen points of the object")
         return None
 

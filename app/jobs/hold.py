@@ -3,7 +3,8 @@
 
 Before the plan, each candidate's grasp is judged on the cloud the camera saw. A grasp that would
 slide out is tried again moved down its pad plane by `HoldConfig.moves` (off a cap that narrows to
-the top, onto the neck or the body), no farther than the palm stays clear of the cloud; when no move holds, it is ruled out and the record says why.
+the top, onto the neck or the body), no farther than the palm stays clear of the cloud; when no move
+holds, it is ruled out and the record says why.
 After a slip, grasps within `HoldConfig.slip_away` of the slipped one are ruled out too. Positions on
 the object are compared in the cloud's principal-axis frame - the position along the longest axis, of
 either sign, and the distance from it - so the object may have fallen, turned about its axis, or

@@ -30,7 +30,7 @@ class MotionConfig:
     short_lever_search: int = 1_200  # states of constrained search for an object held nearer its centroid (about 0.2 s)
     joint_speed: float = 2.0  # rad/s on transits: 63 % of the UR5's 3.15 (ur_rtde's moveJ default is 1.05)
     joint_acceleration: float = 4.0  # rad/s^2: half the base joints' 8 (docs/decisions.md, "Speeds")
-    carry_speed: float = 1.05  # rad/s on transits holding the object (the carry, the second look's turn)
+    carry_speed: float = 1.05  # rad/s on the carry (the second look's turn of the wrist alone: joint_speed)
     carry_acceleration: float = 1.4  # rad/s^2 (faster, lying bottles hit the cell and stopped the arm)
     line_speed: float = 0.25  # m/s on the empty gripper's straight lines: retreat, clear (ur_rtde's moveL default)
     line_acceleration: float = 1.2  # m/s^2 (ur_rtde's moveL default)
@@ -57,8 +57,9 @@ RANGES = (("approach_distance", 0.0, 0.5, "m", False), ("approach_cone", 0.0, 90
           ("retreat_distance", 0.0, 0.5, "m", False), ("carry_pivot", 0.0, 180.0, "degrees", True),
           ("pivot_lever", 0.0, 1.0, "m", True), ("short_lever_search", 1, 1_000_000, "states", True),
           ("joint_speed", 0.0, 3.15, "rad/s", False), ("joint_acceleration", 0.0, 40.0, "rad/s^2", False),
-          ("line_speed", 0.0, 1.0, "m/s", False), ("gentle_line_speed", 0.0, 1.0, "m/s", False),
-          ("gentle_line_acceleration", 0.0, 10.0, "m/s^2", False), ("gentle_line_jerk", 0.0, 100.0, "m/s^3", False), ("line_acceleration", 0.0, 10.0, "m/s^2", False),
-          ("line_jerk", 0.0, 100.0, "m/s^3", False), ("check_step", 0.0, 0.5, "rad", False),
+          ("line_speed", 0.0, 1.0, "m/s", False), ("line_acceleration", 0.0, 10.0, "m/s^2", False),
+          ("line_jerk", 0.0, 100.0, "m/s^3", False), ("gentle_line_speed", 0.0, 1.0, "m/s", False),
+          ("gentle_line_acceleration", 0.0, 10.0, "m/s^2", False), ("gentle_line_jerk", 0.0, 100.0, "m/s^3", False),
+          ("check_step", 0.0, 0.5, "rad", False),
           ("carry_speed", 0.0, 3.15, "rad/s", False), ("carry_acceleration", 0.0, 40.0, "rad/s^2", False),
           ("end_tolerance", 0.0, 0.5, "rad", False), ("ik_candidates", 1, 8, "branches", True))
