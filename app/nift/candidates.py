@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from hardware.settings import check_integers, check_ranges
-from hardware.se3 import make_pose, rotation_angle, rotvec_to_matrix
+from hardware.se3 import make_pose, rotvec_to_matrix
 
 HALF_TURN_Z = make_pose(rotvec_to_matrix([0.0, 0.0, np.pi]))  # a two-finger grasp's symmetry
 IDENTITY = (np.eye(4),)
@@ -44,11 +44,12 @@ class CandidateConfig:
 
 def same_pose(poses: np.ndarray, T: np.ndarray, config: CandidateConfig,
               symmetries: tuple[np.ndarray, ...] = IDENTITY) -> np.ndarray:
-    """(K,) bool: which of poses (K, 4, 4) are the same candidate as T (4, 4)."""
+    """(K,) bool: which of poses (K, 4, 4) are the same candidate as T (4, 4); the angle test is
+    angle(R) < a  <=>  (trace R - 1) / 2 > cos a, batched (no rotation vectors)."""
     near = np.linalg.norm(poses[:, :3, 3] - T[:3, 3], axis=-1) < config.translation  # (K,)
-    angles = np.stack([rotation_angle(np.einsum("ba,kbc->kac", T[:3, :3], poses[:, :3, :3] @ S[:3, :3]))
-                       for S in symmetries])  # (S, K)
-    return near & (angles.min(axis=0) < config.rotation)
+    S = np.stack([s[:3, :3] for s in symmetries])  # (S, 3, 3)
+    cosines = (np.einsum("ba,kbc,sca->sk", T[:3, :3], poses[:, :3, :3], S) - 1.0) / 2.0  # (S, K) cos angle
+    return near & (cosines.max(axis=0) > np.cos(config.rotation))
 
 
 def leaders(poses: np.ndarray, losses: np.ndarray, config: CandidateConfig = CandidateConfig(),

@@ -62,11 +62,11 @@ import torch
 import torch._dynamo  # noqa: F401 - Adam's constructor imports it on first use (1.9 s here): paid at start-up, not in a job
 
 from app.nift.candidates import HALF_TURN_Z, IDENTITY, candidates, leaders
-from app.nift.field import NeuralField, load_field
+from app.nift.field import Latent, NeuralField, shared_field
 from app.nift.imitation_config import ImitationConfig
 from app.nift.schedule import cosine
 from app.nift.template import FEATURES, Template, point_features
-from hardware.se3 import make_pose, random_rotations
+from hardware.se3 import random_rotations
 
 
 @dataclass
@@ -155,14 +155,15 @@ def eq5(f: torch.Tensor, targets: torch.Tensor, w: torch.Tensor) -> torch.Tensor
 
 
 def losses_at(template: Template, cloud: np.ndarray, poses: np.ndarray, config: ImitationConfig = ImitationConfig(),
-              field: NeuralField | None = None) -> np.ndarray:
+              field: NeuralField | None = None, latent: Latent | None = None) -> np.ndarray:
     """Eq. 5 (I,) at given anchor poses (I, 4, 4) in the cloud's (N, 3) frame, with `config`'s
-    weighting and demo matching: what `imitate` minimises."""
-    field = field or load_field(FEATURES[template.feature])
+    weighting and demo matching: what `imitate` minimises; `latent`: the cloud already encoded by `field`."""
+    field = field or shared_field(FEATURES[template.feature])
     X, targets, w = targets_and_weights(template, config)  # (M, 3), (D, M, F), (M,)
     x = np.einsum("iab,mb->ima", poses[:, :3, :3], X.double().numpy()) + poses[:, None, :3, 3]  # (I, M, 3)
     with torch.no_grad():
-        f = point_features(field, template.feature, field.encode(cloud), torch.as_tensor(x, dtype=torch.float32))
+        latent = latent if latent is not None else field.encode(cloud)
+        f = point_features(field, template.feature, latent, torch.as_tensor(x, dtype=torch.float32))
         return eq5(f, targets, w).numpy().astype(np.float64)
 
 
@@ -198,42 +199,70 @@ def frozen(module: torch.nn.Module):
 
 def imitate(template: Template, cloud: np.ndarray, config: ImitationConfig = ImitationConfig(),
             field: NeuralField | None = None, feasible: Feasible | None = None,
-            starts: np.ndarray | None = None) -> Imitation:
+            starts: np.ndarray | None = None, latent: Latent | None = None) -> Imitation:
     """Optimise Eq. 5 for a target cloud (N, 3); `field` defaults to the template's shipped field;
     `feasible` (optional) rules poses out, see the module doc; `starts` (I, 4, 4), optional: anchor
-    poses to start from, beside the `config.inits` random ones."""
+    poses to start from, beside the `config.inits` random ones; `latent`: the cloud already encoded by
+    `field` (the encoder runs once per cloud for both templates)."""
     cloud = np.asarray(cloud, dtype=np.float64)
     if cloud.ndim != 2 or cloud.shape[1] != 3 or len(cloud) < 16:
         raise ValueError(f"the target cloud must be (N, 3) with N >= 16, got shape {cloud.shape}")
     if not all(np.isfinite(a).all() for a in (template.points, template.features, template.per_demo) if a is not None):
         raise ValueError(f"the {template.anchor} template holds NaN or infinite values: rebuild it from its demos")
     start = time.perf_counter()
-    field = field or load_field(FEATURES[template.feature])
+    field = field or shared_field(FEATURES[template.feature])
     with frozen(field):
-        return _optimise(template, cloud, config, field, start, feasible, starts)
+        if latent is None:
+            with torch.no_grad():
+                latent = field.encode(cloud)
+        return _optimise(template, cloud, config, field, latent, start, feasible, starts)
 
 
 def _poses(r6: torch.Tensor, t: torch.Tensor, c_X: torch.Tensor, c_O: torch.Tensor) -> np.ndarray:
     """(I, 4, 4) float64 poses T x = R (x - c_X) + c_O + t of the parameters (I, 6), (I, 3)."""
-    with torch.no_grad():
-        R = rotation_from_6d(r6)
-        trans = c_O + t - torch.einsum("iab,b->ia", R, c_X)
-    return np.stack([make_pose(R[i].double().numpy(), trans[i].double().numpy()) for i in range(len(R))])
+    with torch.no_grad():  # in float64: rotations orthonormal to 1e-15, as the pose code downstream expects
+        R = rotation_from_6d(r6.double())
+        trans = c_O.double() + t.double() - torch.einsum("iab,b->ia", R, c_X.double())
+    T = np.tile(np.eye(4), (len(R), 1, 1))
+    T[:, :3, :3], T[:, :3, 3] = R.numpy(), trans.numpy()
+    return T
 
 
 def _survivors(loss: torch.Tensor, poses: np.ndarray | None, feasible: Feasible | None, config: ImitationConfig,
                symmetries: tuple[np.ndarray, ...], n: int) -> torch.Tensor:
     """Rows (n,) a pruning step keeps, by rank: feasible leaders, then feasible followers (the same
     candidate as a better pose, `app.nift.candidates`; only with `config.diverse`), then the
-    infeasible ones, each group by loss."""
+    infeasible ones in the same order. The predicate is asked in that order only until n feasible
+    rows are found: the rest cannot make the cut."""
     rank = loss.clone()
     span = float(rank.max() - rank.min()) + 1.0
     if config.diverse:
         _, followers = leaders(poses, loss.numpy(), config.candidates, symmetries)
         rank[torch.as_tensor(followers, dtype=torch.long)] += span
-    if feasible is not None:  # infeasible ones are dropped first, the worst of them first
-        rank[torch.as_tensor(~feasible(poses))] += 2 * span
-    return torch.argsort(rank)[:n]
+    order = torch.argsort(rank)
+    if feasible is None:
+        return order[:n]
+    kept, infeasible = [], []
+    for row in order.tolist():  # one pose at a time: a feasibility check (a collision query) costs ~1 ms
+        (kept if feasible(poses[row:row + 1])[0] else infeasible).append(row)
+        if len(kept) == n:
+            break
+    return torch.as_tensor((kept + infeasible)[:n], dtype=torch.long)
+
+
+def memoised(feasible: Feasible) -> Feasible:
+    """The predicate, asked once per distinct pose: a pose dropped by the pruning keeps its last value,
+    and the final check of every pose meets it again."""
+    seen: dict[bytes, bool] = {}
+
+    def check(poses: np.ndarray) -> np.ndarray:
+        keys = [T.tobytes() for T in poses]
+        new = [i for i, k in enumerate(keys) if k not in seen]
+        if new:
+            seen.update(zip((keys[i] for i in new), map(bool, feasible(poses[new]))))
+        return np.array([seen[k] for k in keys], dtype=bool)
+
+    return check
 
 
 def symmetries_of(template: Template) -> tuple[np.ndarray, ...]:
@@ -255,10 +284,11 @@ def _initial(config: ImitationConfig, rng: np.random.Generator, c_X: torch.Tenso
     return torch.cat([R0, S[:, :, :3]]), torch.cat([t0, tS])
 
 
-def _optimise(template: Template, cloud: np.ndarray, config: ImitationConfig, field: NeuralField,
+def _optimise(template: Template, cloud: np.ndarray, config: ImitationConfig, field: NeuralField, latent: Latent,
               start: float, feasible: Feasible | None = None, starts: np.ndarray | None = None) -> Imitation:
     """The loop of `imitate` (the field's parameters frozen)."""
     symmetries = symmetries_of(template)
+    feasible = memoised(feasible) if feasible is not None else None
     rng = np.random.default_rng(config.seed)
     X, target, w = targets_and_weights(template, config)  # (M, 3), (D, M, F), (M,) sum 1
     c_X, c_O = X.mean(dim=0), torch.as_tensor(cloud.mean(axis=0), dtype=torch.float32)
@@ -267,8 +297,6 @@ def _optimise(template: Template, cloud: np.ndarray, config: ImitationConfig, fi
     r6 = rotation_to_6d(R0).requires_grad_(True)  # (I, 6)
     t = t0.clone().requires_grad_(True)  # (I, 3)
     opt = torch.optim.Adam([r6, t], lr=config.lr)
-    with torch.no_grad():
-        latent = field.encode(cloud)
     feature = template.feature
 
     def losses(r6: torch.Tensor, t: torch.Tensor, rows: torch.Tensor | None = None) -> torch.Tensor:

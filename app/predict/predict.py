@@ -28,13 +28,14 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
+import torch
 
 from app.layout import CellLayout
 from app.nift.cpd import best_registration
-from app.nift.field import load_field
+from app.nift.field import shared_field
 from app.nift.imitate import imitate, losses_at, symmetries_of
 from app.nift.template import FEATURES, field_override
-from app.objects import fixture
+from app.objects import Fixture, fixture
 from app.predict.pairs import Candidate, excess, ranked_pairs
 from app.predict.carried_grasps import carried_pairs, carried_places
 from app.predict.feasibility import (Reach, all_of, carries_like_demos,
@@ -98,18 +99,19 @@ def predict(t: Task, cloud: np.ndarray, config: PredictConfig = PredictConfig(),
     pred = _predict(t, cloud, config, method_record(config.method), T_base_fixture, reachable)
     center, align = config.center, config.align
     pred.T_base_tcp = refine_grasp(pred.T_base_tcp, cloud, center=center, align=align)
+    peg = fixture(t.fixture)  # built once for every candidate
     if center:
-        seen = center_on_peg(pred.T_base_fixture_seen, cloud, fixture(t.fixture))
+        seen = center_on_peg(pred.T_base_fixture_seen, cloud, peg)
         if not np.array_equal(seen, pred.T_base_fixture_seen):  # unmoved (the shelf): keep the motion bit for bit
             pred.motion = pred.motion @ pred.T_base_fixture_seen @ invert(seen)  # T_base_fixture @ inv(seen)
             pred.T_base_fixture_seen = seen
-    pred.candidates = [refine_candidate(c, t, cloud, center=center, align=align) for c in pred.candidates]
+    pred.candidates = [refine_candidate(c, peg, cloud, center=center, align=align) for c in pred.candidates]
     return pred
 
 
-def refine_candidate(c: Candidate, t: Task, cloud: np.ndarray, *, center: bool, align: bool) -> Candidate:
-    """A candidate pair refined as `predict` refines its best poses."""
-    seen = center_on_peg(c.T_base_fixture_seen, cloud, fixture(t.fixture)) if center else c.T_base_fixture_seen
+def refine_candidate(c: Candidate, peg: Fixture, cloud: np.ndarray, *, center: bool, align: bool) -> Candidate:
+    """A candidate pair refined as `predict` refines its best poses (`peg`: the task's fixture)."""
+    seen = center_on_peg(c.T_base_fixture_seen, cloud, peg) if center else c.T_base_fixture_seen
     return replace(c, T_base_tcp=refine_grasp(c.T_base_tcp, cloud, center=center, align=align),
                    T_base_fixture_seen=seen)
 
@@ -140,21 +142,23 @@ def _predict(t: Task, cloud: np.ndarray, settings: PredictConfig, m: Method, T_b
     config, feasible, carried_grasps = settings.imitation, settings.feasible, settings.carried_grasps
     nearest = tuple(s for s in STAGES if config.demo_match(stage_anchor(t, s)) == "nearest")  # per-demo features
     templates = task_templates(t, directory, query, feature, nif=nif, per_demo=nearest)
-    field = load_field(field_override(feature, nif) or FEATURES[feature])  # once for both templates
+    field = shared_field(field_override(feature, nif) or FEATURES[feature])  # once for both templates
+    with torch.no_grad():
+        latent = field.encode(cloud)  # once for every imitation and loss on this cloud
     reach = reachable if feasible else None
     grips = all_of(grips_something(cloud), reaches(reach) if reach else None) if feasible else None
     demos = task_demos(directory) if config.grasp_start_turns or feasible or carried_grasps else None
     begin = gravity_starts(demos, cloud, config.grasp_start_turns) if config.grasp_start_turns else None
-    grasp = imitate(templates["grasp"], cloud, config, field, grips, begin)
+    grasp = imitate(templates["grasp"], cloud, config, field, grips, begin, latent)
     demos_carried = demo_carries(demos) if feasible or carried_grasps else None
     carried = demos_carried if feasible else None
     carry = carries_like_demos(grasp.T, carried) if feasible else None
     starts = carried_places(grasp.candidates, demos_carried) if carried_grasps else None
-    place = imitate(templates["place"], cloud, config, field, carry, starts)
+    place = imitate(templates["place"], cloud, config, field, carry, starts, latent)
     pairs = ranked_pairs(grasp, place, T_base_fixture, carried)
     if carried_grasps:
         pairs += carried_pairs(grasp, place, T_base_fixture, demos_carried,
-                               lambda G: losses_at(templates["grasp"], cloud, G, config, field), grips,
+                               lambda G: losses_at(templates["grasp"], cloud, G, config, field, latent), grips,
                                symmetries_of(templates["grasp"]), config.candidates, len(grasp.candidates))
         pairs.sort(key=lambda c: c.score)
     return Prediction(method, grasp.T, place.T, T_base_fixture @ invert(place.T),

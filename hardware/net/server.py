@@ -1,7 +1,8 @@
 """`DeviceServer`: devices behind one ZeroMQ ROUTER socket.
 
-Every request carries the shared token (refused and logged without it; the device does not move)
-and is checked before it reaches a device (`hardware.net.checks`, in the verb tables of
+Every request is checked for its shape first (`hardware.net.request`: no field is used before), carries
+the shared token (refused and logged without it; the device does not move) and is checked before it
+reaches a device (`hardware.net.checks`, in the verb tables of
 `hardware.net.verbs`); a malformed or oversized message gets an error reply and the server keeps
 serving. One client commands a device at a time: the first to send it a command holds it until it
 says "release" or stays silent for `lease` seconds with nothing running; another client may read
@@ -27,6 +28,7 @@ from typing import Any
 import zmq
 
 from hardware.net import wire
+from hardware.net.request import parse
 from hardware.net.verbs import Service
 
 LOG = logging.getLogger("nift.net")
@@ -166,34 +168,32 @@ class DeviceServer:
         except wire.WireError as exc:
             LOG.warning("malformed request refused: %s", exc)
             reply = wire.reply_error("WireError", str(exc))
+        except Exception as exc:  # noqa: BLE001 - no request may end the serve loop: logged, answered
+            LOG.exception("request failed inside the server")
+            reply = wire.reply_error("InternalError", f"the server failed on this request ({type(exc).__name__})")
         try:
             self._socket.send_multipart([*head, reply])
         except zmq.ZMQError as exc:
             LOG.warning("reply not sent: %s", exc)
 
     def _handle(self, payload: bytes) -> Any:
-        message = wire.unpack(payload)
-        if message.get("v") != wire.PROTOCOL:
-            raise Refused("ProtocolError", f"protocol version {message.get('v')!r}; this server speaks {wire.PROTOCOL}")
-        client = message.get("client")
-        if not isinstance(client, str) or not 0 < len(client) <= 100:
-            raise Refused("WireError", "a request must name its client (a string of 1-100 characters)")
-        token = message.get("token")
-        if not isinstance(token, str) or not hmac.compare_digest(token.encode(), self.config.token.encode()):
+        request = parse(wire.unpack(payload))  # the shape first: no field is used before it is checked
+        client = request.client
+        if not hmac.compare_digest(request.token.encode(), self.config.token.encode()):
             LOG.warning("refused a request from client %r: wrong token", client[:40])
             raise Refused("Unauthorized", "wrong or missing token: request refused")
-        device, verb, args = self._resolve(message.get("device")), message.get("verb"), message.get("args", [])
+        if request.v != wire.PROTOCOL:
+            raise Refused("ProtocolError", f"protocol version {request.v}; this server speaks {wire.PROTOCOL}")
+        device, verb, args = self._resolve(request.device), request.verb, request.args
         if device not in self.services:
-            raise Refused("UnknownDevice", f"no device {device!r} here (serving: {', '.join(self.services)})")
-        if not isinstance(args, list):
-            raise Refused("WireError", "args must be a list")
+            raise Refused("UnknownDevice", f"no device {device[:40]!r} here (serving: {', '.join(self.services)})")
         self._seen[client] = time.monotonic()
         if verb in BUILTIN:
             return self._builtin(client, device, verb, args)
         svc = self.services[device]
         spec = svc.verbs.get(verb) if isinstance(verb, str) else None
         if spec is None:
-            raise Refused("UnknownVerb", f"{svc.kind} {device!r} has no verb {verb!r}")
+            raise Refused("UnknownVerb", f"{svc.kind} {device!r} has no verb {verb[:40]!r}")
         if len(args) > spec.most_args:
             raise Refused("ValueError", f"{verb} takes at most {spec.most_args} arguments, got {len(args)}")
         if spec.kind in ("command", "motion"):

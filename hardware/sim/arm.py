@@ -279,10 +279,12 @@ class SimArm(StopState, Arm):
                 qd_des = np.zeros(6)
             self.robot.command_arm(q_des, qd_des)
             world.step()
-            error = np.abs(self.robot.arm_state()[0] - q_des).max()
+            errors = np.abs(self.robot.arm_state()[0] - q_des)  # (6,)
+            error = float(errors.max())
             self.max_tracking_error = max(self.max_tracking_error, error)
             if error > self.config.tracking_error_limit:
-                return self._halt(f"protective stop: tracking error {error:.3f} rad", protective=True)
+                return self._halt(f"protective stop: tracking error {error:.3f} rad (joint {int(errors.argmax()) + 1})",
+                                  protective=True)
             if i % 8 == 0 and (force := self._arm_contact_force()) > self.config.contact_force_limit:
                 return self._halt(f"protective stop: {force:.0f} N contact on the arm", protective=True)
             if self._detecting and (change := self._force_change()) is not None:

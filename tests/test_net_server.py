@@ -1,0 +1,127 @@
+"""The device server against malformed requests: no message stops it or moves the arm (a fake UR5
+served in a thread; the realtime served cell is `tests/test_hil.py`)."""
+import threading
+
+import msgpack
+import numpy as np
+import pytest
+import zmq
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from hardware.fake.arm import FakeArm
+from hardware.net import wire
+from hardware.net.request import MAX_DEPTH
+from hardware.net.server import BUILTIN, DeviceServer, ServerConfig
+from hardware.net.verbs import device_service
+
+TOKEN = "t0ken-for-the-fuzz-" * 2
+
+
+@pytest.fixture(scope="module")
+def served():
+    arm = FakeArm()
+    arm.connect()
+    server = DeviceServer({"arm": device_service("arm", arm)}, ServerConfig(TOKEN))
+    server.start()
+    thread = threading.Thread(target=server.serve_forever, daemon=True)
+    thread.start()
+    sock = zmq.Context.instance().socket(zmq.REQ)
+    sock.setsockopt(zmq.RCVTIMEO, 3000)
+    sock.setsockopt(zmq.LINGER, 0)
+    sock.connect(f"tcp://127.0.0.1:{server.port}")
+    yield server, arm, sock, thread
+    server.stop()
+    thread.join(5)
+    server.close()
+    sock.close()
+
+
+def ask(sock: zmq.Socket, payload: bytes) -> dict:
+    sock.send(payload)
+    return wire.unpack(sock.recv())
+
+
+def raw_request(**fields: bytes) -> bytes:
+    """A request map whose values are given as raw msgpack bytes (msgpack's packer will not nest 1,000 deep)."""
+    return bytes([0x80 | len(fields)]) + b"".join(
+        msgpack.packb(k) + v for k, v in fields.items())
+
+
+def nested(levels: int) -> bytes:
+    return b"\x91" * levels + b"\x01"  # [[[...[1]...]]]
+
+
+def fields(**override) -> dict[str, bytes]:
+    base = {"v": 1, "token": TOKEN, "client": "fuzz", "device": "arm", "verb": "getActualQ", "args": []}
+    return {k: (v if isinstance(v, bytes) else msgpack.packb(v)) for k, v in {**base, **override}.items()}
+
+
+def still_serving(sock: zmq.Socket, arm: FakeArm) -> None:
+    reply = ask(sock, wire.request(TOKEN, "fuzz", "arm", "getActualQ"))
+    assert reply["ok"] and np.allclose(reply["value"], arm.getActualQ())
+
+
+@pytest.mark.parametrize("case, payload", [
+    ("a version nested 1,000 deep, before any token", raw_request(**fields(v=nested(1000), token=b"\xa1x"))),
+    ("a device named by a list", raw_request(**fields(device=msgpack.packb(["arm"])))),
+    ("a device named by a map", raw_request(**fields(device=msgpack.packb({"arm": 1})))),
+    ("a verb nested deep", raw_request(**fields(verb=nested(900)))),
+    ("args nested beyond the limit", raw_request(**fields(args=nested(MAX_DEPTH + 2)))),
+    ("args that are not a list", raw_request(**fields(args=msgpack.packb({"q": 1})))),
+    ("an unknown field", raw_request(**fields(extra=msgpack.packb(1)))),
+    ("a client name of 10,000 characters", raw_request(**fields(client=msgpack.packb("c" * 10_000)))),
+])
+def test_a_malformed_request_is_answered_as_a_wire_error_and_the_server_serves_on(served, case, payload):
+    server, arm, sock, thread = served
+    reply = ask(sock, payload)
+    assert not reply["ok"] and reply["error"] in ("WireError", "Unauthorized"), (case, reply)
+    assert len(reply["message"]) < 300 and "\n" not in reply["message"]
+    assert thread.is_alive()
+    still_serving(sock, arm)
+
+
+def test_an_unexpected_failure_inside_the_server_is_answered_and_the_loop_goes_on(served, monkeypatch):
+    server, arm, sock, thread = served
+    monkeypatch.setattr(server, "_handle", lambda payload: {}["no such key"])
+    reply = ask(sock, wire.request(TOKEN, "fuzz", "arm", "getActualQ"))
+    assert not reply["ok"] and reply["error"] == "InternalError" and "KeyError" in reply["message"]
+    monkeypatch.undo()
+    assert thread.is_alive()
+    still_serving(sock, arm)
+
+
+SCALARS = st.none() | st.booleans() | st.integers(-2**63, 2**64 - 1) | st.floats() | st.text(max_size=8) | st.binary(max_size=8)
+VALUES = st.recursive(SCALARS, lambda inner: st.lists(inner, max_size=3) | st.dictionaries(st.text(max_size=4), inner, max_size=3),
+                      max_leaves=6)
+NOT_A_VERB = st.text(max_size=12).filter(lambda v: v not in device_service("arm", FakeArm()).verbs and v not in BUILTIN)
+KEYS = ("v", "token", "client", "device", "verb", "args")
+
+
+@st.composite
+def malformed(draw) -> bytes:
+    """Random bytes, a random value, or a request map with some fields missing, mistyped or extra: with
+    the wrong token anything goes; with the right one the verb is never one the arm has."""
+    kind = draw(st.sampled_from(("bytes", "value", "wrong token", "right token")))
+    if kind == "bytes":
+        return draw(st.binary(max_size=64))
+    if kind == "value":
+        return msgpack.packb(draw(VALUES))
+    message = {k: draw(VALUES) for k in KEYS if draw(st.booleans())}
+    message.update(draw(st.dictionaries(st.text(max_size=6), VALUES, max_size=2)))
+    if kind == "wrong token":
+        message["token"] = draw(VALUES.filter(lambda t: t != TOKEN))
+    else:
+        message.update(token=TOKEN, verb=draw(NOT_A_VERB | VALUES.filter(lambda v: not isinstance(v, str))))
+    return msgpack.packb(message)
+
+
+@settings(max_examples=250, deadline=None, suppress_health_check=list(HealthCheck))
+@given(payloads=st.lists(malformed(), min_size=40, max_size=40))
+def test_ten_thousand_malformed_requests_leave_the_server_answering_and_the_arm_still(served, payloads):
+    """250 examples of 40 requests each (Hypothesis's own cost per example is what takes the time)."""
+    server, arm, sock, thread = served
+    for payload in payloads:
+        reply = ask(sock, payload)
+        assert reply["ok"] is False and isinstance(reply["error"], str)
+    assert arm.motions == [] and np.allclose(arm.getActualQ(), arm.config.home_q)
