@@ -90,6 +90,11 @@ def run_imitation_benchmark(quick: bool = False, seed: int = 0, method: str = "n
     grasp / place errors, under `schedule` (`schedule_settings`)."""
     cell = CellConfig()
     settings = schedule_settings(schedule, method, seed, config)
+    if schedule == "cell":  # a job's threads too (`JobConfig.threads`)
+        from app.jobs.settings import JobConfig
+        from app.nift.imitate import use_threads
+
+        use_threads(JobConfig().threads)
     config = settings.imitation
     n = 2 if quick else objects
     figures: dict = {"method": method, "schedule": schedule, "objects_per_task": n, "inits": config.inits,
