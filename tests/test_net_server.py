@@ -1,6 +1,7 @@
 """The device server against malformed requests: no message stops it or moves the arm (a fake UR5
 served in a thread; the realtime served cell is `tests/test_hil.py`)."""
 import threading
+from contextlib import contextmanager
 
 import msgpack
 import numpy as np
@@ -18,23 +19,37 @@ from hardware.net.verbs import device_service
 TOKEN = "t0ken-for-the-fuzz-" * 2
 
 
-@pytest.fixture(scope="module")
-def served():
+@contextmanager
+def serving():
+    """A fake arm served in a thread, and one REQ socket to it."""
     arm = FakeArm()
     arm.connect()
     server = DeviceServer({"arm": device_service("arm", arm)}, ServerConfig(TOKEN))
     server.start()
     thread = threading.Thread(target=server.serve_forever, daemon=True)
     thread.start()
+    sock = connect(server)
+    try:
+        yield server, arm, sock, thread
+    finally:
+        server.stop()
+        thread.join(5)
+        server.close()
+        sock.close()
+
+
+def connect(server: DeviceServer) -> zmq.Socket:
     sock = zmq.Context.instance().socket(zmq.REQ)
     sock.setsockopt(zmq.RCVTIMEO, 3000)
     sock.setsockopt(zmq.LINGER, 0)
     sock.connect(f"tcp://127.0.0.1:{server.port}")
-    yield server, arm, sock, thread
-    server.stop()
-    thread.join(5)
-    server.close()
-    sock.close()
+    return sock
+
+
+@pytest.fixture(scope="module")
+def served():
+    with serving() as s:
+        yield s
 
 
 def ask(sock: zmq.Socket, payload: bytes) -> dict:
@@ -125,3 +140,30 @@ def test_ten_thousand_malformed_requests_leave_the_server_answering_and_the_arm_
         reply = ask(sock, payload)
         assert reply["ok"] is False and isinstance(reply["error"], str)
     assert arm.motions == [] and np.allclose(arm.getActualQ(), arm.config.home_q)
+
+
+def test_a_job_result_goes_only_to_the_client_whose_job_it_is():
+    """Another client polling the commander's job is told there is no such job, and the commander still
+    collects its own result afterwards."""
+    with serving() as (server, arm, sock, thread):
+        other = connect(server)
+        target = np.asarray(arm.getActualQ()) + 0.2
+        job = ask(sock, wire.request(TOKEN, "commander", "arm", "moveJ", target))["value"]["job"]
+        stolen = ask(other, wire.request(TOKEN, "other", "arm", "result", job, 0.02))
+        assert not stolen["ok"] and "no job" in stolen["message"]
+        mine = ask(sock, wire.request(TOKEN, "commander", "arm", "result", job, 0.02))
+        assert mine["ok"] and mine["value"]["done"] and mine["value"]["value"] is True
+        assert np.allclose(arm.getActualQ(), target)
+        other.close()
+
+
+def test_release_puts_back_the_settings_a_client_changed():
+    """A commander sets a 0.5 m TCP offset, teach mode and contact detection, then releases: the next
+    client finds the server's TCP offset, no teach mode and no contact detection."""
+    with serving() as (server, arm, sock, thread):
+        tcp0 = np.array(arm.getTCPOffset())
+        for verb, *args in (("setTcp", np.array([0, 0, 0.5, 0, 0, 0.0])), ("teachMode",), ("startContactDetection",)):
+            assert ask(sock, wire.request(TOKEN, "first", "arm", verb, *args))["ok"], verb
+        assert arm.isTeachMode() and np.isclose(arm.getTCPOffset()[2], 0.5)
+        assert ask(sock, wire.request(TOKEN, "first", "arm", "release"))["ok"]
+        assert not arm.isTeachMode() and np.allclose(arm.getTCPOffset(), tcp0) and not arm._detecting

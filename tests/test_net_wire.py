@@ -62,6 +62,29 @@ def test_trajectory_checks():
         checks.trajectory(t, q, np.full((5, 6), 5.0), LIMITS)
 
 
+def test_a_trajectory_is_checked_by_the_motion_its_samples_imply_whatever_velocities_it_brings():
+    """500 rad/s implied by the positions is refused without velocities, and with zero velocities; a
+    Ruckig-timed motion at the limits (sampled at 8 ms) passes, its difference quotients being means."""
+    from ruckig import InputParameter, Result, Ruckig, Trajectory
+
+    t, q = np.array([0.0, 0.01]), np.vstack([np.zeros(6), np.full(6, 5.0)])
+    for qd in (None, np.zeros((2, 6))):
+        with pytest.raises(ValueError, match="moves joint 1 at 500 rad/s"):
+            checks.trajectory(t, q, qd, LIMITS)
+    with pytest.raises(ValueError, match="accelerates joint 1"):
+        checks.trajectory(np.array([0.0, 0.1, 0.2]), np.array([[0.0] * 6, [0.0] * 6, [0.25] * 6]), None, LIMITS)
+    inp = InputParameter(6)
+    inp.current_position, inp.target_position = [0.0] * 6, [4.0, -3.0, 2.0, 1.0, -5.0, 0.5]
+    inp.max_velocity, inp.max_acceleration, inp.max_jerk = LIMITS.velocity, LIMITS.acceleration, LIMITS.jerk
+    traj = Trajectory(6)
+    assert Ruckig(6).calculate(inp, traj) == Result.Working
+    times = np.arange(0.0, traj.duration, 0.008)
+    samples = [traj.at_time(x) for x in times]
+    Q, V = np.array([s[0] for s in samples]), np.array([s[1] for s in samples])
+    assert np.abs(V).max() > 0.99 * LIMITS.velocity.min()  # it does reach the limit
+    assert checks.trajectory(times, Q, V, LIMITS)[1].shape == Q.shape
+
+
 def test_poses_beyond_the_workspace_are_refused():
     with pytest.raises(ValueError, match="workspace"):
         checks.pose([441.0, 0, 0, 0, 0, 0])

@@ -67,6 +67,7 @@ def trajectory(times: Any, q: Any, qd: Any, limits: JointLimits) -> tuple[np.nda
     outside = np.flatnonzero(np.any((Q < limits.lower - 1e-9) | (Q > limits.upper + 1e-9), axis=1))  # (K,)
     if len(outside):
         raise ValueError(f"trajectory leaves the joint limits at sample {outside[0]} of {len(Q)}")
+    implied_motion(t, Q, limits)
     if qd is None:
         return t, Q, None
     V = _array(qd, "trajectory velocities")
@@ -75,6 +76,27 @@ def trajectory(times: Any, q: Any, qd: Any, limits: JointLimits) -> tuple[np.nda
     if np.any(np.abs(V) > limits.velocity * 1.05):
         raise ValueError("trajectory velocities exceed the joint velocity limits")
     return t, Q, V
+
+
+def implied_motion(t: np.ndarray, Q: np.ndarray, limits: JointLimits, margin: float = 1.05) -> None:
+    """Refuse samples (T,), (T, 6) whose own differences move a joint faster or accelerate it harder than
+    its limits allow, whatever velocities came with them: a difference quotient is a weighted mean of
+    the true velocity (acceleration) over its interval, so a path within the limits always passes."""
+    dt = np.diff(t)  # (T-1,)
+    V = np.diff(Q, axis=0) / dt[:, None]  # (T-1, 6) mean velocity per interval
+    fast = np.argwhere(np.abs(V) > limits.velocity * margin)
+    if len(fast):
+        i, j = fast[0]
+        raise ValueError(f"trajectory moves joint {j + 1} at {abs(V[i, j]):.3g} rad/s between samples {i} and "
+                         f"{i + 1} (limit {limits.velocity[j]:.3g} rad/s)")
+    if len(t) < 3:
+        return
+    A = np.diff(V, axis=0) / ((t[2:] - t[:-2]) / 2)[:, None]  # (T-2, 6) mean acceleration about each inner sample
+    hard = np.argwhere(np.abs(A) > limits.acceleration * margin)
+    if len(hard):
+        i, j = hard[0]
+        raise ValueError(f"trajectory accelerates joint {j + 1} at {abs(A[i, j]):.3g} rad/s^2 at sample {i + 1} "
+                         f"(limit {limits.acceleration[j]:.3g} rad/s^2)")
 
 
 def text(value: Any, what: str, choices: tuple[str, ...] | None = None) -> str:

@@ -215,10 +215,11 @@ class DeviceServer:
             return {"kind": svc.kind, "protocol": wire.PROTOCOL, "properties": svc.properties,
                     "controlled_by_other": device in self._control and self._control[device].client != client}
         if verb == "result":
-            return self._result(args[0] if args else None, args[1] if len(args) > 1 else 0.0)
+            return self._result(client, args[0] if args else None, args[1] if len(args) > 1 else 0.0)
         if verb == "release":
             if device in self._control and self._control[device].client == client:
                 del self._control[device]
+                self._reset(device)
             return None
         if verb == "kickWatchdog":
             return None
@@ -243,6 +244,7 @@ class DeviceServer:
                 raise Refused("Busy", f"{device} is commanded by another client ({held.client[:40]}, for "
                                       f"{now - held.since:.1f} s); a second client may read it but not command it")
             LOG.info("%s: control passes from silent client %r to %r", device, held.client[:40], client[:40])
+            self._reset(device)
             held = None
         if held is None:
             self._control[device] = _Control(client, now, self.config.watchdog)
@@ -255,11 +257,18 @@ class DeviceServer:
             del self._jobs[k]
         return job_id
 
-    def _result(self, job_id: Any, wait: Any = 0.0) -> dict:
-        """A job's outcome, waiting for it up to `wait` s (at most MAX_WAIT: the socket is not answered meanwhile)."""
-        job = self._jobs.get(job_id) if isinstance(job_id, int) else None
-        if job is None:
-            raise Refused("ValueError", f"no job {job_id!r} on this server")
+    def _reset(self, device: str) -> None:
+        """The device's per-client settings put back (`Service.reset`) when its commander lets go."""
+        reset = self.services[device].reset
+        if reset is not None:
+            self._call(lambda: reset(self.services[device].device))
+
+    def _result(self, client: str, job_id: Any, wait: Any = 0.0) -> dict:
+        """A job's outcome, to the client whose job it is, waiting for it up to `wait` s (at most
+        MAX_WAIT: the socket is not answered meanwhile)."""
+        job = self._jobs.get(job_id) if isinstance(job_id, int) and not isinstance(job_id, bool) else None
+        if job is None or job.client != client:  # another client's job is not shown to exist
+            raise Refused("ValueError", f"no job {str(job_id)[:20]} of this client on this server")
         if isinstance(wait, (int, float)) and not isinstance(wait, bool) and wait > 0:
             futures.wait([job.future], timeout=min(float(wait), MAX_WAIT))
         if not job.future.done():

@@ -45,6 +45,7 @@ class Service:
     verbs: dict[str, Verb]
     properties: dict[str, str] = field(default_factory=dict)
     watchdog: bool = False  # motions stop when the commanding client falls silent
+    reset: Callable[[Any], None] | None = None  # back to the settings a new commander expects (on release, handover)
 
 
 def arg(args: list, i: int, default: Any = None) -> Any:
@@ -130,7 +131,22 @@ def camera_verbs(camera: DepthCamera) -> dict[str, Verb]:
             "last_frame": Verb(lambda c, _: last_frame(c))}  # the last capture again: what delivery alone costs
 
 
+def arm_reset(arm: Arm) -> Callable[[Any], None]:
+    """What a client's session may have changed on an arm, put back: teach mode ended, contact detection
+    off, the TCP offset the server started with."""
+    tcp = np.array(arm.getTCPOffset(), float)
+
+    def reset(a: Arm) -> None:
+        if a.isTeachMode():
+            a.endTeachMode()
+        a.stopContactDetection()
+        a.setTcp(tcp)
+
+    return reset
+
+
 def device_service(kind: str, device: Any, properties: dict[str, str] | None = None) -> Service:
     """The service of an arm, gripper or camera."""
     verbs = {"arm": arm_verbs, "gripper": gripper_verbs, "camera": camera_verbs}[kind](device)
-    return Service(kind, device, verbs, dict(properties or {}), watchdog=kind == "arm")
+    return Service(kind, device, verbs, dict(properties or {}), watchdog=kind == "arm",
+                   reset=arm_reset(device) if kind == "arm" else None)
