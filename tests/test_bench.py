@@ -203,6 +203,18 @@ def test_a_results_line_that_is_not_a_row_is_named(tmp_path):
     assert [r["method"] for r in read_rows(tmp_path)] == ["cpd"]
 
 
+def test_a_torn_run_record_or_a_foreign_results_line_is_refused_before_anything_is_written(tmp_path):
+    config = BenchConfig(tasks=("bowl",), poses=("upright",), methods=(ORACLE,), trials=1)
+    (tmp_path / "run.json").write_text('{"format": "nift-bench/1", "tri')
+    with pytest.raises(ValueError, match="run.json is not a run record"):
+        run(config, tmp_path, workers=1)
+    (tmp_path / "run.json").unlink()
+    (tmp_path / "results.jsonl").write_text("[1, 2]\n")
+    with pytest.raises(ValueError, match="line 1 is not a result row"):
+        run(config, tmp_path, workers=1)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["results.jsonl"]
+
+
 def test_memory_growth_across_refreshes_sees_what_stays_and_not_the_sawtooth():
     from app.bench.memory import growth_across_refreshes, growth_mb_per_job
     from app.simcell.sim_job import fresh_client_before

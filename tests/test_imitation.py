@@ -283,3 +283,11 @@ def test_a_prediction_encodes_its_cloud_once_for_both_templates(monkeypatch):
     cloud = demo_scene()[0]
     pred = predict(task("mug"), cloud, PredictConfig(feasible=False))
     assert len(calls) == 1 and len(pred.candidates) >= 1
+
+
+def test_a_template_whose_features_do_not_fit_the_field_is_refused_by_name(demo):
+    cloud, stages = demo
+    template = stages["grasp"][0]
+    narrow = replace(template, features=template.features[:, :-3])
+    with pytest.raises(ValueError, match="template's features are .* wide, but the nif field gives"):
+        imitate(narrow, cloud, ImitationConfig(inits=2, iterations=2))

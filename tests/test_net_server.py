@@ -167,3 +167,39 @@ def test_release_puts_back_the_settings_a_client_changed():
         assert arm.isTeachMode() and np.isclose(arm.getTCPOffset()[2], 0.5)
         assert ask(sock, wire.request(TOKEN, "first", "arm", "release"))["ok"]
         assert not arm.isTeachMode() and np.allclose(arm.getTCPOffset(), tcp0) and not arm._detecting
+
+
+def test_a_port_already_in_use_is_an_os_error_naming_it():
+    with serving() as (server, arm, sock, thread):
+        taken = DeviceServer({}, ServerConfig(TOKEN, port=server.port))
+        with pytest.raises(OSError, match=f"cannot listen on 127.0.0.1 port {server.port}"):
+            taken.start()
+
+
+def test_a_rig_verb_that_moves_the_arm_needs_the_arms_commander():
+    """A test rig's motions move the arm (`Service.moves`): a second client is refused Busy and the arm
+    does not move; the client that commands the arm may use the rig."""
+    from hardware.net.verbs import Service, Verb
+
+    arm = FakeArm()
+    arm.connect()
+    home = np.array(arm.getActualQ())
+    rig = Service("sim", arm, {"nudge": Verb(lambda a, _: a.moveJ(home + 0.1), "motion")}, moves=("arm",))
+    server = DeviceServer({"arm": device_service("arm", arm), "rig": rig}, ServerConfig(TOKEN))
+    server.start()
+    thread = threading.Thread(target=server.serve_forever, daemon=True)
+    thread.start()
+    commander, other = connect(server), connect(server)
+    try:
+        assert ask(commander, wire.request(TOKEN, "commander", "arm", "setTcp", np.array(arm.getTCPOffset())))["ok"]
+        refused = ask(other, wire.request(TOKEN, "other", "rig", "nudge"))
+        assert not refused["ok"] and refused["error"] == "Busy" and np.allclose(arm.getActualQ(), home)
+        job = ask(commander, wire.request(TOKEN, "commander", "rig", "nudge"))["value"]["job"]
+        assert ask(commander, wire.request(TOKEN, "commander", "rig", "result", job, 0.02))["value"]["done"]
+        assert np.allclose(arm.getActualQ(), home + 0.1)
+    finally:
+        server.stop()
+        thread.join(5)
+        server.close()
+        commander.close()
+        other.close()

@@ -52,12 +52,21 @@ def prepare(config: BenchConfig, out: Path) -> Path:
     run_file = out / "run.json"
     wanted = json.loads(json.dumps(settings(config)))
     if run_file.exists():
-        earlier = {**ADDED, **json.loads(run_file.read_text())}  # an older run: what it did then
+        try:
+            recorded = json.loads(run_file.read_text())
+        except (json.JSONDecodeError, UnicodeDecodeError):
+            recorded = None
+        if not isinstance(recorded, dict):
+            raise ValueError(f"{run_file} is not a run record (torn or not a JSON object); remove it or choose another --out")
+        earlier = {**ADDED, **recorded}  # an older run: what it did then
         if {**earlier, "trials": None} != {**wanted, "trials": None}:
             raise ValueError(f"{out} holds results of a run with other settings; choose another --out")
+        if not isinstance(earlier.get("trials"), int):
+            raise ValueError(f"{run_file} records no number of trials; remove it or choose another --out")
         if config.trials < earlier["trials"]:
             raise ValueError(f"{out} holds a run of {earlier['trials']} trials per task and pose; "
                              f"ask for at least that many or choose another --out")
+    read_rows(out)  # a results file with a foreign line is refused before anything is written
     # more trials than before extend the run: a trial's seed depends on its index alone (protocol.py)
     write_json(run_file, wanted)
     root = bench_demos(config, out)

@@ -69,6 +69,7 @@ def run(args: argparse.Namespace) -> int:
     from app.bench.protocol import BenchConfig
     from app.bench.report import write_report
     from app.bench.runner import run as run_bench
+    from app.console.options import check_workers
     from app.io_utils import writable_directory
     from app.nift.field import load_field
     from app.nift.template import field_override
@@ -91,6 +92,7 @@ def run(args: argparse.Namespace) -> int:
                          objects=_names(args.objects or ""),
                          demo_dir=str(args.demo_dir.resolve()) if args.demo_dir else None)
     config.check()  # before the progress bar: the error is the only line
+    check_workers(args.workers)
     writable_directory(args.out, "--out")
     if args.nif is not None:  # the weights load before any work (and before the bar)
         for feature in ("nif", "ndf"):

@@ -43,8 +43,10 @@ def config_from(args: argparse.Namespace):
 
 
 def run(args: argparse.Namespace) -> int:
+    from app.console.options import check_workers
     from app.training.data import make_dataset
 
+    check_workers(args.workers)  # before the data modules load and anything is written
     report = make_dataset(config_from(args), args.out, workers=args.workers, progress=not args.json)
     print_figures(report.figures(), args.json)
     return 0

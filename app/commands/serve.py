@@ -46,9 +46,12 @@ def _devices(text: str) -> list[str]:
 def check_bind(bind: str, token_file: Path | None) -> None:
     """Loopback, or another address with an explicit token file."""
     try:
-        loopback = bind == "localhost" or ipaddress.ip_address(bind).is_loopback
+        address = None if bind == "localhost" else ipaddress.ip_address(bind)
     except ValueError:
         raise ValueError(f"--bind {bind!r} is not an IP address") from None
+    if address is not None and address.version != 4:  # discovery announces on IPv4 only
+        raise ValueError(f"--bind {bind}: an IPv4 address is needed (127.0.0.1 for this machine)")
+    loopback = address is None or address.is_loopback
     if not loopback and token_file is None:
         raise ValueError(f"--bind {bind} exposes the cell beyond this machine: give the shared token with --token-file too")
 

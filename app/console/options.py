@@ -86,3 +86,13 @@ def add_second_look_argument(p: argparse.ArgumentParser) -> None:
     p.add_argument("--second-look", action=argparse.BooleanOptionalAction, default=None,
                    help="after the lift, show the held object to the camera and choose the place again from what it "
                         "shows (template methods; default: on for hangs, off for the shelf; docs/jobs.md)")
+
+
+MAX_WORKERS = 256
+
+
+def check_workers(workers: int) -> int:
+    """--workers as given, or a one-line error when it is not a count of processes."""
+    if not 1 <= workers <= MAX_WORKERS:
+        raise ValueError(f"--workers must be in [1, {MAX_WORKERS}] processes, got {workers}")
+    return workers

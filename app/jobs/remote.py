@@ -5,7 +5,8 @@ and judges it. Nothing here imports the simulator: the cell runs in `nift serve`
 from __future__ import annotations
 
 import sys
-from dataclasses import dataclass, field
+import uuid
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Callable
 
@@ -36,7 +37,9 @@ class NetCell:
     """The networked devices and the served cell's rig, connected together."""
 
     def __init__(self, config: NetCellConfig = NetCellConfig()) -> None:
-        self.config = config
+        session = uuid.uuid4().hex[:12]  # one client to the server: the rig's verbs move the arm this session commands
+        self.config = config = replace(config, **{k: replace(getattr(config, k), session=session)
+                                                  for k in ("arm", "gripper", "camera", "rig")})
         self.arm, self.gripper, self.camera = NetArm(config.arm), NetGripper(config.gripper), NetCamera(config.camera)
         self.rig: NetClient | None = None
 

@@ -211,6 +211,10 @@ def imitate(template: Template, cloud: np.ndarray, config: ImitationConfig = Imi
         raise ValueError(f"the {template.anchor} template holds NaN or infinite values: rebuild it from its demos")
     start = time.perf_counter()
     field = field or shared_field(FEATURES[template.feature])
+    width = field.config.out_dim if template.feature == "scf" else field.config.feature_dim
+    if template.features.shape[-1] != width:
+        raise ValueError(f"the {template.anchor} template's features are {template.features.shape[-1]} wide, but the "
+                         f"{template.feature} field gives {width}: rebuild the template from its demos")
     with frozen(field):
         if latent is None:
             with torch.no_grad():
@@ -220,9 +224,10 @@ def imitate(template: Template, cloud: np.ndarray, config: ImitationConfig = Imi
 
 def _poses(r6: torch.Tensor, t: torch.Tensor, c_X: torch.Tensor, c_O: torch.Tensor) -> np.ndarray:
     """(I, 4, 4) float64 poses T x = R (x - c_X) + c_O + t of the parameters (I, 6), (I, 3)."""
-    with torch.no_grad():  # in float64: rotations orthonormal to 1e-15, as the pose code downstream expects
-        R = rotation_from_6d(r6.double())
-        trans = c_O.double() + t.double() - torch.einsum("iab,b->ia", R, c_X.double())
+    with torch.no_grad():  # in float32, then widened: every downstream check sees the poses it always saw
+        R = rotation_from_6d(r6)
+        trans = c_O + t - torch.einsum("iab,b->ia", R, c_X)
+        R, trans = R.double(), trans.double()
     T = np.tile(np.eye(4), (len(R), 1, 1))
     T[:, :3, :3], T[:, :3, 3] = R.numpy(), trans.numpy()
     return T

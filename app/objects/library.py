@@ -26,7 +26,7 @@ from app.objects.collision import DecompositionConfig, decompose, read_parts_obj
 from app.objects.loading import PreparedMesh, prepare_mesh, read_mesh
 
 FORMAT = "nift-object/1"
-NAME_PATTERN = re.compile(r"^[a-z0-9][a-z0-9_-]{0,63}$")
+NAME_PATTERN = re.compile(r"[a-z0-9][a-z0-9_-]{0,63}")
 SIMPLIFY_TOLERANCES = (0.0002, 0.0004, 0.0008, 0.0016, 0.0032)  # m
 COLLISION_FACES = 2000  # triangles CoACD decomposes at most: a 12k-face mug scan took 51 s with 4,000, 14 s with 2,000
 
@@ -49,7 +49,7 @@ def library_dir() -> Path:
 
 def check_name(name: str) -> str:
     """The name if it can name an object (lower-case letters, digits, - and _; not a category)."""
-    if not NAME_PATTERN.match(name):
+    if not NAME_PATTERN.fullmatch(name):  # fullmatch: "$" alone lets a trailing newline through
         raise ValueError(f"object name {name!r}: use 1-64 lower-case letters, digits, '-' or '_', "
                          f"starting with a letter or digit")
     if name in CATEGORIES:

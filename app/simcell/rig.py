@@ -65,4 +65,4 @@ def rig_service(rig: SimRig) -> Service:
              "oracle": Verb(lambda r, _: r.oracle(), "motion"),
              "clear": Verb(lambda r, _: r.clear(), "motion"),
              "calibrate": Verb(lambda r, _: r.calibrate(), "motion")}
-    return Service("sim", rig, verbs, {"model": "pybullet-cell"})
+    return Service("sim", rig, verbs, {"model": "pybullet-cell"}, moves=("arm", "gripper"))  # its verbs move them

@@ -47,15 +47,16 @@ class NetDeviceConfig:
     discovery_timeout: float = 3.0
     poll: float = 0.02  # s each poll of a running motion waits on the server (each poll a watchdog kick)
     motion_timeout: float = 120.0  # s a blocking verb may take
+    session: str | None = None  # the client's name to the server; devices of one session share it (None: its own)
 
 
 class NetClient:
     """One REQ socket to a device server; thread-safe; a reply lost to a timeout is dropped
     (REQ_RELAXED, REQ_CORRELATE) so the next request starts clean."""
 
-    def __init__(self, address: str, token: str, device: str, timeout: float = 5.0) -> None:
+    def __init__(self, address: str, token: str, device: str, timeout: float = 5.0, session: str | None = None) -> None:
         self.address, self.token, self.device, self.timeout = address, token, device, timeout
-        self.client = uuid.uuid4().hex[:12]
+        self.client = session or uuid.uuid4().hex[:12]  # who the server sees: one session commands its devices
         self.note = ""  # the server's note on the last blocking verb (a watchdog stop)
         self._lock = threading.Lock()
         s = zmq.Context.instance().socket(zmq.REQ)
@@ -117,7 +118,7 @@ def open_client(config: NetDeviceConfig, kind: str) -> tuple[NetClient, dict]:
 
         found = find(kind, config.name, config.discovery_timeout)
         address, device = found.address, found.name
-    client = NetClient(address, token, device, config.timeout)
+    client = NetClient(address, token, device, config.timeout, config.session)
     try:
         hello = client.call("hello")
     except Exception:

@@ -112,11 +112,16 @@ class DeviceServer:
         s = self._context.socket(zmq.ROUTER)
         s.setsockopt(zmq.LINGER, 0)
         s.setsockopt(zmq.MAXMSGSIZE, 4 * wire.MAX_MESSAGE)  # far larger: the peer is cut off, never buffered
-        if self.config.port:
-            s.bind(f"tcp://{self.config.bind}:{self.config.port}")
-            self.port = self.config.port
-        else:
-            self.port = s.bind_to_random_port(f"tcp://{self.config.bind}")
+        host = self.config.bind
+        try:
+            if self.config.port:
+                s.bind(f"tcp://{host}:{self.config.port}")
+                self.port = self.config.port
+            else:
+                self.port = s.bind_to_random_port(f"tcp://{host}")
+        except zmq.ZMQError as exc:
+            s.close(0)
+            raise OSError(f"cannot listen on {self.config.bind} port {self.config.port or 'any'}: {exc}") from None
         self._socket = s
         LOG.info("serving %s on %s:%d", ", ".join(self.services), self.config.bind, self.port)
         return self.port
@@ -197,7 +202,10 @@ class DeviceServer:
         if len(args) > spec.most_args:
             raise Refused("ValueError", f"{verb} takes at most {spec.most_args} arguments, got {len(args)}")
         if spec.kind in ("command", "motion"):
-            self._claim(client, device)
+            for name in (device, *self._moved(device)):  # all or none: each checked before any is taken
+                self._check_claim(client, name)
+            for name in (device, *self._moved(device)):
+                self._claim(client, name)
         if spec.kind in ("motion", "work"):
             return {"job": self._submit(client, device, lambda: spec.call(svc.device, args))}
         return self._call(lambda: spec.call(svc.device, args))
@@ -234,7 +242,13 @@ class DeviceServer:
         return None
 
     # control, jobs, watchdog -------------------------------------------------------------------
-    def _claim(self, client: str, device: str) -> None:
+    def _moved(self, device: str) -> list[str]:
+        """The other served devices a device's motions move (`Service.moves`)."""
+        kinds = self.services[device].moves
+        return [name for name, svc in self.services.items() if name != device and svc.kind in kinds]
+
+    def _check_claim(self, client: str, device: str) -> None:
+        """Busy unless `client` may command `device` now."""
         now = time.monotonic()
         held = self._control.get(device)
         if held is not None and held.client != client:
@@ -243,11 +257,16 @@ class DeviceServer:
                 LOG.warning("refused %r commanding %s: client %r commands it", client[:40], device, held.client[:40])
                 raise Refused("Busy", f"{device} is commanded by another client ({held.client[:40]}, for "
                                       f"{now - held.since:.1f} s); a second client may read it but not command it")
+
+    def _claim(self, client: str, device: str) -> None:
+        self._check_claim(client, device)
+        held = self._control.get(device)
+        if held is not None and held.client != client:
             LOG.info("%s: control passes from silent client %r to %r", device, held.client[:40], client[:40])
             self._reset(device)
             held = None
         if held is None:
-            self._control[device] = _Control(client, now, self.config.watchdog)
+            self._control[device] = _Control(client, time.monotonic(), self.config.watchdog)
 
     def _submit(self, client: str, device: str, work) -> int:
         job_id = next(self._ids)
@@ -280,12 +299,15 @@ class DeviceServer:
         return {"done": True, "value": job.future.result(), "note": job.note}
 
     def _running(self, device: str) -> bool:
-        return any(j.device == device and not j.future.done() for j in self._jobs.values())
+        """A job runs on the device, or on a device whose motions move it (a rig's, for the arm)."""
+        return any(not j.future.done() and (j.device == device or device in self._moved(j.device))
+                   for j in self._jobs.values())
 
     def _watch(self) -> None:
         now = time.monotonic()
         for job in list(self._jobs.values()):
-            if job.future.done() or job.note or not self.services[job.device].watchdog:
+            svc = self.services[job.device]
+            if job.future.done() or job.note or not (svc.watchdog or svc.moves):
                 continue
             control = self._control.get(job.device)
             limit = control.watchdog if control else self.config.watchdog
@@ -295,11 +317,15 @@ class DeviceServer:
                 self._safe_stop(job.device, job.note)
 
     def _safe_stop(self, device: str, why: str) -> None:
+        """stopJ on the device, or on the devices its motions move (a rig has no stopJ of its own)."""
         LOG.warning("%s: %s", device, why)
-        try:
-            self.services[device].device.stopJ()
-        except Exception:  # noqa: BLE001 - a failing stop is logged; the server keeps serving
-            LOG.exception("%s: stopJ failed", device)
+        for name in [device] if "stopJ" in self.services[device].verbs else self._moved(device):
+            if "stopJ" not in self.services[name].verbs:
+                continue
+            try:
+                self.services[name].device.stopJ()
+            except Exception:  # noqa: BLE001 - a failing stop is logged; the server keeps serving
+                LOG.exception("%s: stopJ failed", name)
 
     @staticmethod
     def _call(work) -> Any:

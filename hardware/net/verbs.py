@@ -46,6 +46,8 @@ class Service:
     properties: dict[str, str] = field(default_factory=dict)
     watchdog: bool = False  # motions stop when the commanding client falls silent
     reset: Callable[[Any], None] | None = None  # back to the settings a new commander expects (on release, handover)
+    moves: tuple[str, ...] = ()  # kinds of the other served devices its motions move (a test rig moves the arm):
+    # commanding it commands them too, and the watchdog stops them
 
 
 def arg(args: list, i: int, default: Any = None) -> Any:
