@@ -21,14 +21,17 @@
     |- PlaceMissed                   the camera sees nothing new where the object was sent: it fell
     `- PlaceFailed                   the cell's verdict on the place is no
 
-Anything else raised inside a job is a bug: the job ends as an internal error (`INTERNAL_ERROR`), its
-traceback goes to the log, and the benchmarks count it apart (`app.jobs.job.run_job`).
+A device whose controller stopped answering (`hardware.interfaces.DeviceConnectionLost`) ends the job
+as `CONNECTION_LOST`, naming the stage and the lost server, with no clean-up tried. Anything else raised
+inside a job is a bug: the job ends as an internal error (`INTERNAL_ERROR`), its traceback goes to the
+log, and the benchmarks count it apart (`app.jobs.job.run_job`).
 """
 from __future__ import annotations
 
 from typing import ClassVar
 
 INTERNAL_ERROR = "internal_error"  # the record's kind for an exception that is no CellFailure
+CONNECTION_LOST = "connection_lost"  # the record's kind when a device's controller stopped answering
 
 
 class CellFailure(Exception):

@@ -23,6 +23,10 @@ class ProtectiveStopError(RuntimeError):
     """The arm is in a protective stop; motion is refused until it is unlocked."""
 
 
+class DeviceConnectionLost(ConnectionError):
+    """The link to a device's controller is gone (it stopped answering): nothing more can be asked of it."""
+
+
 @dataclass(frozen=True)
 class JointLimits:
     """Per-joint limits of an arm (radians, rad/s, rad/s^2, rad/s^3)."""

@@ -332,3 +332,15 @@ def test_a_grasp_whose_first_look_place_is_out_of_reach_is_picked_and_placed_fro
     assert result.success, result.reason
     assert result.candidates[-1]["outcome"].startswith("planned (pick only") and result.look["pick_only"]
     assert placed_on_the_shelf(cell)
+
+
+def test_a_lost_controller_ends_the_job_naming_the_stage_and_tries_no_clean_up(cell, scene):
+    from hardware.interfaces import DeviceConnectionLost
+
+    def lost(cloud: np.ndarray) -> Prediction:
+        raise DeviceConnectionLost("lost the device server at tcp://10.0.0.2:6000: arm did not answer")
+
+    result = run(cell, scene, lost)
+    assert not result.success and result.failure_kind == "connection_lost" and result.failed_stage == "imitate"
+    assert result.reason.startswith("imitate: lost the device server at tcp://10.0.0.2:6000")
+    assert cell.arm.stops == 0 and result.arm.startswith("unknown")

@@ -203,3 +203,35 @@ def test_a_rig_verb_that_moves_the_arm_needs_the_arms_commander():
         server.close()
         commander.close()
         other.close()
+
+
+def test_a_client_whose_server_vanishes_mid_motion_gives_up_within_two_seconds_naming_it():
+    """A server that accepts a motion and then falls silent (as after kill -9): the blocking verb raises
+    DeviceConnectionLost naming the server within LOST_AFTER, and every later call fails at once."""
+    import time
+
+    from hardware.interfaces import DeviceConnectionLost
+    from hardware.net.client import LOST_AFTER, NetClient
+
+    router = zmq.Context.instance().socket(zmq.ROUTER)
+    router.setsockopt(zmq.LINGER, 0)
+    port = router.bind_to_random_port("tcp://127.0.0.1")
+
+    def answer_once() -> None:
+        *head, _ = router.recv_multipart()
+        router.send_multipart([*head, wire.reply_ok({"job": 1})])  # then silence
+
+    threading.Thread(target=answer_once, daemon=True).start()
+    client = NetClient(f"tcp://127.0.0.1:{port}", TOKEN, "arm")
+    try:
+        start = time.monotonic()
+        with pytest.raises(DeviceConnectionLost, match=f"lost the device server at tcp://127.0.0.1:{port}"):
+            client.run("moveJ", np.zeros(6))
+        assert LOST_AFTER <= time.monotonic() - start < LOST_AFTER + 1.0
+        start = time.monotonic()
+        with pytest.raises(DeviceConnectionLost):
+            client.call("stopJ")
+        assert time.monotonic() - start < 0.1
+    finally:
+        client.close()
+        router.close()

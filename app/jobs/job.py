@@ -29,7 +29,7 @@ from dataclasses import replace
 import numpy as np
 
 from app.categories import REVOLUTION
-from app.failures import (INTERNAL_ERROR, CellFailure, GraspMissed, GraspSlipped, NoCandidate, PlaceFailed, PlaceMissed,
+from app.failures import (CONNECTION_LOST, INTERNAL_ERROR, CellFailure, GraspMissed, GraspSlipped, NoCandidate, PlaceFailed, PlaceMissed,
                           ReleaseJammed)
 from app.jobs.check import sighting
 from app.jobs.choice import choose, describe
@@ -55,7 +55,7 @@ from app.predict.predict import Prediction, predict, predict_place
 from app.predict.palm_clearance import seated
 from app.predict.turned_grasps import turned_pairs
 from app.tasks.task import Task
-from hardware.interfaces import Arm, DepthCamera, Gripper
+from hardware.interfaces import Arm, DepthCamera, DeviceConnectionLost, Gripper
 from hardware.kinematics import UR5Kinematics
 from hardware.se3 import pose_to_ur, transform_points, ur_to_pose
 
@@ -107,6 +107,9 @@ def run_job(t: Task, arm: Arm, gripper: Gripper, camera: DepthCamera, T_base_cam
     except CellFailure as exc:
         result.reason, result.failure_kind = str(exc), exc.kind
         result.arm = _make_safe(arm, gripper)
+    except DeviceConnectionLost as exc:  # nothing can be asked of the devices any more: no clean-up to try
+        result.reason, result.failure_kind = f"{result.failed_stage}: {exc}", CONNECTION_LOST
+        result.arm = "unknown: the connection to its controller was lost"
     except Exception as exc:  # noqa: BLE001 - a bug of ours: the record says so, the log has the traceback
         log.exception("job %s (%s) failed in stage %s", t.name, config.method, result.failed_stage)
         result.reason, result.failure_kind = f"internal error: {type(exc).__name__}: {exc}", INTERNAL_ERROR

@@ -20,10 +20,13 @@ from typing import Any
 import numpy as np
 import zmq
 
-from hardware.interfaces import (Arm, CameraIntrinsics, DepthCamera, DeviceNotConnectedError, Frame, Gripper,
+from hardware.interfaces import (Arm, CameraIntrinsics, DepthCamera, DeviceConnectionLost, DeviceNotConnectedError, Frame, Gripper,
                                  JointLimits, ProtectiveStopError)
 from hardware.net import wire
 from hardware.net.token import DEFAULT_TOKEN_FILE, read_token
+
+
+LOST_AFTER = 2.0  # s without a reply to a poll (answered within 20 ms while the server lives): the server is gone
 
 
 class DeviceRefusedError(PermissionError):
@@ -58,6 +61,7 @@ class NetClient:
         self.address, self.token, self.device, self.timeout = address, token, device, timeout
         self.client = session or uuid.uuid4().hex[:12]  # who the server sees: one session commands its devices
         self.note = ""  # the server's note on the last blocking verb (a watchdog stop)
+        self.lost = ""  # why the server is taken as gone: every later call fails at once with it
         self._lock = threading.Lock()
         s = zmq.Context.instance().socket(zmq.REQ)
         for option, value in ((zmq.LINGER, 0), (zmq.REQ_RELAXED, 1), (zmq.REQ_CORRELATE, 1),
@@ -66,17 +70,29 @@ class NetClient:
         s.connect(address)
         self._socket = s
 
-    def call(self, verb: str, *args: Any) -> Any:
-        """The verb's value, or the server's error raised as its exception."""
+    def call(self, verb: str, *args: Any, deadline: float | None = None) -> Any:
+        """The verb's value, or the server's error raised as its exception; `deadline` (s): wait at most
+        this long for the reply, and take silence as a lost server (`DeviceConnectionLost`)."""
         with self._lock:
             if self._socket is None:
                 raise DeviceNotConnectedError(f"{self.device} is not connected; call connect() first")
+            if self.lost:
+                raise DeviceConnectionLost(self.lost)
             try:
+                if deadline is not None:
+                    self._socket.setsockopt(zmq.RCVTIMEO, int(deadline * 1000))
                 self._socket.send(wire.request(self.token, self.client, self.device, verb, *args))
                 reply = wire.unpack(self._socket.recv())
             except zmq.Again:
-                raise TimeoutError(f"no reply from {self.device} at {self.address} to {verb} within "
-                                   f"{self.timeout:g} s (is `nift serve` running?)") from None
+                if deadline is None:
+                    raise TimeoutError(f"no reply from {self.device} at {self.address} to {verb} within "
+                                       f"{self.timeout:g} s (is `nift serve` running?)") from None
+                self.lost = (f"lost the device server at {self.address}: {self.device} did not answer a {verb} "
+                             f"poll within {deadline:g} s")
+                raise DeviceConnectionLost(self.lost) from None
+            finally:
+                if deadline is not None and self._socket is not None:
+                    self._socket.setsockopt(zmq.RCVTIMEO, int(self.timeout * 1000))
         if reply.get("ok"):
             return reply.get("value")
         name, message = reply.get("error", "DeviceError"), reply.get("message", "")
@@ -87,7 +103,7 @@ class NetClient:
         job = self.call(verb, *args)["job"]
         end = time.monotonic() + timeout
         while True:
-            state = self.call("result", job, poll)  # the server holds the poll up to `poll` s for the job
+            state = self.call("result", job, poll, deadline=LOST_AFTER)  # held up to `poll` s by the server
             if state["done"]:
                 self.note = state.get("note", "")
                 return state["value"]
