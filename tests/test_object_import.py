@@ -149,3 +149,21 @@ def test_import_then_run_and_bench_by_name_from_the_command_line(tmp_path, mug_s
     assert bench.returncode == 0, bench.stderr
     rows = [json.loads(line) for line in (tmp_path / "b" / "results.jsonl").read_text().splitlines()]
     assert {r["object"] for r in rows} == {"scan-mug"} and len(rows) == 2
+
+
+def test_a_mesh_over_the_size_limits_is_refused_in_one_line(tmp_path, monkeypatch):
+    """The limits are the module's (2 M faces, 512 MB); lowered here so that a small sphere passes them."""
+    import trimesh
+
+    from app.objects import loading
+
+    path = tmp_path / "ball.stl"
+    trimesh.creation.icosphere(subdivisions=2).export(path)  # 320 faces
+    assert len(loading.read_mesh(path).faces) == 320
+    monkeypatch.setattr(loading, "MAX_FACES", 300)
+    with pytest.raises(ValueError, match="320 triangles is over the 300 limit") as faces:
+        loading.read_mesh(path)
+    monkeypatch.setattr(loading, "MAX_FILE_BYTES", 1000)
+    with pytest.raises(ValueError, match="over the 0 MB limit") as size:
+        loading.read_mesh(path)
+    assert "\n" not in str(faces.value) + str(size.value)

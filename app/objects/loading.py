@@ -35,19 +35,30 @@ class PreparedMesh:
     units: str = "m"
 
 
+MAX_FILE_BYTES = 512 * 1024 * 1024  # a larger file is refused before it is read
+MAX_FACES = 2_000_000  # a 5-million-face scan took 144 s and 3.4 GB to import; simplify it first
+
+
 def read_mesh(path: str | Path) -> trimesh.Trimesh:
-    """The file's triangles as one mesh, vertices as stored (no merging); a one-line error if it is none."""
+    """The file's triangles as one mesh, vertices as stored (no merging); a one-line error if it is none
+    or it is larger than MAX_FILE_BYTES or MAX_FACES."""
     path = Path(path)
     if not path.is_file():
         raise FileNotFoundError(f"{path}: no such mesh file")
     if path.suffix.lower() not in FORMATS:
         raise ValueError(f"{path}: unsupported mesh format {path.suffix!r}; use one of {', '.join(FORMATS)}")
+    if path.stat().st_size > MAX_FILE_BYTES:
+        raise ValueError(f"{path}: {path.stat().st_size / 2**20:.0f} MB is over the {MAX_FILE_BYTES // 2**20} MB "
+                         "limit for a mesh file; simplify it first")
     try:
         loaded = trimesh.load(path, force="mesh", process=False)
     except Exception as exc:  # trimesh raises many types for corrupt files
         raise ValueError(f"{path}: could not read as {path.suffix} ({type(exc).__name__})") from None
     if not isinstance(loaded, trimesh.Trimesh) or len(loaded.faces) == 0:
         raise ValueError(f"{path}: holds no triangles")
+    if len(loaded.faces) > MAX_FACES:
+        raise ValueError(f"{path}: {len(loaded.faces):,} triangles is over the {MAX_FACES:,} limit; "
+                         "simplify the mesh first (e.g. quadric decimation in Open3D or MeshLab)")
     if not np.isfinite(loaded.vertices).all():
         raise ValueError(f"{path}: has non-finite vertex coordinates")
     return loaded
