@@ -135,8 +135,11 @@ def test_teaching_on_an_imported_scan_saves_a_demo_that_names_it(tmp_path):
             steps += [session.guide(place @ np.linalg.inv(session.current.T_tcp_obj)), session.release()]
             assert all(s.ok for s in steps), steps
             assert session.save_demo().ok
+            again = session.save_demo()  # a second Save of the same demonstration writes nothing
+            assert again.ok and again.message.startswith("already saved as demo-00")
         finally:
             session.close()
+    assert sorted(p.name for p in (tmp_path / "mug").glob("demo-*.npz")) == ["demo-00.npz"]
     demo = load_demo(tmp_path / "mug" / "demo-00.npz")
     assert demo.object == "my-mug" and demo.taught == "page" and demo.scale == 1.0
 

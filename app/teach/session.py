@@ -72,6 +72,7 @@ class Taught:
     T_tcp_obj: np.ndarray | None = None  # the object in the fingers, while held
     T_fixture_obj: np.ndarray | None = None  # where it was let go, relative to the fixture
     verdicts: dict[str, Verdict] = field(default_factory=dict)
+    saved: str | None = None  # the demo this grasp and place were saved as: a second Save writes nothing
 
     @property
     def held(self) -> bool:
@@ -182,6 +183,7 @@ class TeachSession:
                     self._put_back(taught, T_grasp)
                     return Step(False, f"the lift check failed ({why}): not held; grasp it elsewhere")
                 taught.T_base_tcp, taught.T_tcp_obj = T_grasp, invert(self.tcp()) @ world.pose(taught.obj.body)
+                taught.saved = None  # a new grasp: a new demonstration
                 taught.T_fixture_obj = None
                 return Step(True, f"held: detected and lifted {rose * 100:.1f} cm; carry it to the {self.task.fixture}")
             finally:
@@ -195,7 +197,7 @@ class TeachSession:
             taught.T_fixture_obj = invert(self.T_base_fixture) @ T_base_obj
             verdict = judged_copy(self.judges, taught.obj, T_base_obj, lambda o: judge_place(
                 self.judges, o, T_base_obj, self.judge_fixtures[self.task.fixture], self.task.upright))
-            taught.verdicts["place"], taught.T_tcp_obj = verdict, None
+            taught.verdicts["place"], taught.T_tcp_obj, taught.saved = verdict, None, None  # a new place: unsaved
             self.cell.arm.endTeachMode()
             self.cell.gripper.open()
             self.cell.world.step(int(SETTLE / self.cell.world.config.time_step))
@@ -213,6 +215,8 @@ class TeachSession:
                 raise ValueError(f"no place to save: release the object on the {self.task.fixture} first")
             if not taught.verdicts["place"].success:
                 raise ValueError(f"the place failed its judge ({taught.verdicts['place'].reason}): place it again")
+            if taught.saved is not None:
+                return Step(True, f"already saved as {taught.saved}: put down a new object to teach another demo")
             progress(0.1, "judging the grasp")
             grasp = judged_copy(self.judges, taught.obj, taught.T_base_obj,
                                 lambda o: judge_grasp(self.judges, o, taught.T_base_tcp))
@@ -224,6 +228,7 @@ class TeachSession:
                 count = len(list(stage.glob(DEMO_GLOB)))
                 progress(0.3, f"rebuilding the {self.task.name} templates from {count} demos")
                 templates = task_templates(self.task, stage, rebuild=True)
+            taught.saved = demo.name
             progress(1.0, "saved")
             sizes = ", ".join(f"{s} {len(tp.points)} points" for s, tp in templates.items())
             return Step(True, f"saved {demo.name}; templates rebuilt ({sizes})")
