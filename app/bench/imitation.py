@@ -71,9 +71,6 @@ def place_error(fixture: str, goal_pred: np.ndarray, goal_teacher: np.ndarray) -
     return abs(goal_pred[2, 3] - goal_teacher[2, 3]), float(tilt)
 
 
-SCHEDULES = ("teleported", "cell")
-
-
 def schedule_settings(schedule: str, method: str, seed: int, config: ImitationConfig) -> PredictConfig:
     """What a prediction does: "teleported", the paper tables' (`config`, no centring, no carried
     grasps); "cell", a job's (`PredictConfig`'s defaults: the cell's schedule and every refinement)."""

@@ -154,6 +154,12 @@ def eq5(f: torch.Tensor, targets: torch.Tensor, w: torch.Tensor) -> torch.Tensor
     return (dist * w).sum(dim=-1).min(dim=1).values
 
 
+def latent_of(field: NeuralField, cloud: np.ndarray) -> Latent:
+    """The cloud (N, 3) encoded by `field` without a graph: imitation never trains the encoder."""
+    with torch.no_grad():
+        return field.encode(cloud)
+
+
 def losses_at(template: Template, cloud: np.ndarray, poses: np.ndarray, config: ImitationConfig = ImitationConfig(),
               field: NeuralField | None = None, latent: Latent | None = None) -> np.ndarray:
     """Eq. 5 (I,) at given anchor poses (I, 4, 4) in the cloud's (N, 3) frame, with `config`'s
@@ -162,7 +168,7 @@ def losses_at(template: Template, cloud: np.ndarray, poses: np.ndarray, config: 
     X, targets, w = targets_and_weights(template, config)  # (M, 3), (D, M, F), (M,)
     x = np.einsum("iab,mb->ima", poses[:, :3, :3], X.double().numpy()) + poses[:, None, :3, 3]  # (I, M, 3)
     with torch.no_grad():
-        latent = latent if latent is not None else field.encode(cloud)
+        latent = latent if latent is not None else latent_of(field, cloud)
         f = point_features(field, template.feature, latent, torch.as_tensor(x, dtype=torch.float32))
         return eq5(f, targets, w).numpy().astype(np.float64)
 
@@ -216,9 +222,7 @@ def imitate(template: Template, cloud: np.ndarray, config: ImitationConfig = Imi
         raise ValueError(f"the {template.anchor} template's features are {template.features.shape[-1]} wide, but the "
                          f"{template.feature} field gives {width}: rebuild the template from its demos")
     with frozen(field):
-        if latent is None:
-            with torch.no_grad():
-                latent = field.encode(cloud)
+        latent = latent if latent is not None else latent_of(field, cloud)
         return _optimise(template, cloud, config, field, latent, start, feasible, starts)
 
 

@@ -28,12 +28,11 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
-import torch
 
 from app.layout import CellLayout
 from app.nift.cpd import best_registration
 from app.nift.field import shared_field
-from app.nift.imitate import imitate, losses_at, symmetries_of
+from app.nift.imitate import imitate, latent_of, losses_at, symmetries_of
 from app.nift.template import FEATURES, field_override
 from app.objects import Fixture, fixture
 from app.predict.pairs import Candidate, excess, ranked_pairs
@@ -143,8 +142,7 @@ def _predict(t: Task, cloud: np.ndarray, settings: PredictConfig, m: Method, T_b
     nearest = tuple(s for s in STAGES if config.demo_match(stage_anchor(t, s)) == "nearest")  # per-demo features
     templates = task_templates(t, directory, query, feature, nif=nif, per_demo=nearest)
     field = shared_field(field_override(feature, nif) or FEATURES[feature])  # once for both templates
-    with torch.no_grad():
-        latent = field.encode(cloud)  # once for every imitation and loss on this cloud
+    latent = latent_of(field, cloud)  # once for every imitation and loss on this cloud
     reach = reachable if feasible else None
     grips = all_of(grips_something(cloud), reaches(reach) if reach else None) if feasible else None
     demos = task_demos(directory) if config.grasp_start_turns or feasible or carried_grasps else None

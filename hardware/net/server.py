@@ -112,13 +112,12 @@ class DeviceServer:
         s = self._context.socket(zmq.ROUTER)
         s.setsockopt(zmq.LINGER, 0)
         s.setsockopt(zmq.MAXMSGSIZE, 4 * wire.MAX_MESSAGE)  # far larger: the peer is cut off, never buffered
-        host = self.config.bind
         try:
             if self.config.port:
-                s.bind(f"tcp://{host}:{self.config.port}")
+                s.bind(f"tcp://{self.config.bind}:{self.config.port}")
                 self.port = self.config.port
             else:
-                self.port = s.bind_to_random_port(f"tcp://{host}")
+                self.port = s.bind_to_random_port(f"tcp://{self.config.bind}")
         except zmq.ZMQError as exc:
             s.close(0)
             raise OSError(f"cannot listen on {self.config.bind} port {self.config.port or 'any'}: {exc}") from None
@@ -196,7 +195,7 @@ class DeviceServer:
         if verb in BUILTIN:
             return self._builtin(client, device, verb, args)
         svc = self.services[device]
-        spec = svc.verbs.get(verb) if isinstance(verb, str) else None
+        spec = svc.verbs.get(verb)  # a string: the request's schema says so
         if spec is None:
             raise Refused("UnknownVerb", f"{svc.kind} {device!r} has no verb {verb[:40]!r}")
         if len(args) > spec.most_args:
