@@ -110,6 +110,9 @@ CORPUS: list[tuple[tuple[str, ...], str]] = [
     (("bench-imitation", "--busy", "-1"), "--busy"),
     (("bench", "--workers", "0", "--out", "b"), "--workers"),
     (("make-data", "--workers", "-3", "--out", "d"), "--workers"),
+    (("make-data", "--workers", "0", "--out", "d"), "--workers"),
+    (("bench", "--address", "127.0.0.1:9", "--out", "b"), "127.0.0.1:9"),
+    (("make-data", "--address", "no-port-here", "--out", "d"), "no-port-here"),
     # the network
     (("serve", "--bind", "0.0.0.0"), "--bind"),
     (("serve", "--bind", "not-an-address"), "--bind"),

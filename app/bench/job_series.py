@@ -1,22 +1,34 @@
 """`nift bench-jobs`: executed pick-and-place in the sim cell - success over a series of jobs per task,
 with the failures counted by stage, and the cycle's figures (median and p90): the arm's seconds in
-motion and joint travel, planning, imitation, decision and wall time."""
+motion and joint travel, planning, imitation, decision and wall time.
+
+The jobs are Ray tasks (app.fanout): each worker builds its own cell and planning scene, refreshes
+their physics clients every REFRESH_EVERY jobs as a series in one process does, and is replaced by a
+fresh process after RECYCLE_AFTER jobs. A job's record is a function of its spec (the object, pose and
+camera noise all follow from its seed), so the rows do not depend on the number of workers.
+"""
 from __future__ import annotations
 
+import os
 from collections import Counter
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
 import numpy as np
 
 from app.bench.memory import growth_across_refreshes, growth_mb_per_job, resident_mb
+from app.fanout.cluster import ClusterConfig
+from app.fanout.run import fan_out
 from app.failures import INTERNAL_ERROR, NoDemoLikeGrasp
 from app.io_utils import write_json
 from app.jobs.job import JobConfig, JobResult
 from app.motion.scene import PlanningScene
 from app.simcell.cell import CellConfig, SimCell
-from app.simcell.sim_job import JobSpec, fresh_client_before, run_series
+from app.simcell.sim_job import JobSpec, fresh_client_before, run_sim_job
 from app.tasks.task import task
+
+RECYCLE_AFTER = 100  # jobs a worker process runs before a fresh one replaces it
 
 
 def _moved_place(look: dict) -> bool:
@@ -83,55 +95,133 @@ def per_object(results: list[JobResult]) -> dict[str, str]:
     return {name: f"{sum(v)}/{len(v)}" for name, v in tally.items()}
 
 
+@dataclass(frozen=True)
+class SeriesSetup:
+    """What every worker of a series needs: the cell's settings, the calibrated camera pose, how jobs run."""
+
+    cell: CellConfig
+    T_base_cam: np.ndarray
+    job: JobConfig
+
+
+@dataclass
+class CellWorker:
+    """A worker process's own simulated cell and planning scene, and how many jobs it has run."""
+
+    cell: SimCell
+    scene: PlanningScene
+    setup: SeriesSetup
+    jobs: int = 0
+
+    def close(self) -> None:
+        self.scene.close()
+        self.cell.disconnect()
+
+
+@dataclass(frozen=True)
+class JobRun:
+    """One job's result, with the worker's memory after it (MiB), which worker ran it and its job count there."""
+
+    result: JobResult
+    resident_mb: float
+    worker: int
+    number: int
+
+
+def make_cell_worker(setup: SeriesSetup) -> CellWorker:
+    cell = SimCell(setup.cell)
+    cell.connect()
+    return CellWorker(cell, PlanningScene(setup.cell), setup)
+
+
+def run_spec(worker: CellWorker, spec: JobSpec) -> JobRun:
+    """One job in this worker's cell (on fresh physics clients every REFRESH_EVERY jobs)."""
+    if fresh_client_before(worker.jobs):
+        worker.cell.refresh()
+        worker.scene.rebuild()
+    result = run_sim_job(worker.cell, worker.scene, worker.setup.T_base_cam, spec, worker.setup.job)
+    worker.jobs += 1
+    return JobRun(result, resident_mb(), os.getpid(), worker.jobs - 1)
+
+
+def failed_job(spec: JobSpec, job: JobConfig, error: str) -> JobRun:
+    """A job whose task raised outside the job's own handling: an internal error in its record."""
+    result = JobResult(spec.task.name, job.method, reason=f"internal error: {error}", failure_kind=INTERNAL_ERROR)
+    result.info = {"seed": spec.seed, "pose": spec.pose}
+    return JobRun(result, float("nan"), -1, -1)
+
+
+def camera_pose(cell_config: CellConfig, calibration: Path | None) -> np.ndarray:
+    """T_base_cam from the calibration file (calibrating a cell here first if it is missing), or the true one."""
+    from app.simcell.calibration import ensure_calibration, load_calibration
+
+    if calibration is not None and calibration.exists():
+        return load_calibration(calibration)[0]
+    with SimCell(cell_config) as cell:
+        return np.array(cell.camera.config.T_base_cam) if calibration is None else ensure_calibration(cell, calibration)
+
+
+def memory_figures(runs: list[JobRun]) -> dict:
+    """Resident memory per worker: after its first and last job, the peak, and its growth per job
+    (second half; across fresh physics clients), the worst worker's."""
+    by_worker: dict[int, list[JobRun]] = {}
+    for r in runs:
+        if r.worker >= 0:
+            by_worker.setdefault(r.worker, []).append(r)
+    if not by_worker:
+        return {}
+    series = [[r.resident_mb for r in sorted(v, key=lambda r: r.number)] for v in by_worker.values()]
+    longest = max(series, key=len)
+    figures = {"workers_used": len(series), "resident_mb_after_first_job": round(longest[0], 1),
+               "resident_mb_after_last_job": round(longest[-1], 1),
+               "resident_mb_max": round(max(max(s) for s in series), 1),
+               "resident_mb_growth_per_job_second_half": round(max(growth_mb_per_job(s) for s in series), 3)}
+    kept = [g for s in series if (g := growth_across_refreshes(s, [0] + [i for i in range(len(s))
+                                                                       if fresh_client_before(i)])) is not None]
+    if kept:
+        figures["resident_mb_growth_per_job_across_refreshes"] = round(max(kept), 3)
+    figures["resident_mb_every_20_jobs"] = {i: round(longest[i], 1) for i in range(0, len(longest), 20)}
+    return figures
+
+
 def run_jobs_benchmark(jobs: int = 20, job: JobConfig = JobConfig(), pose: str = "upright", seed: int = 0,
                        tasks: tuple[str, ...] = ("mug", "bowl", "bottle"), cell_config: CellConfig = CellConfig(),
                        calibration: Path | None = None, progress: Callable[[JobResult], None] = lambda r: None,
                        records: Path | None = None, objects: dict[str, list] | None = None,
-                       split: str = "test") -> dict:
+                       split: str = "test", cluster: ClusterConfig = ClusterConfig(1)) -> dict:
     """Run `jobs` jobs per task (seeds seed .. seed + jobs - 1) and summarise them; the camera pose
     comes from the `calibration` file (calibrating first if it is missing), or is the true one;
-    `records`: every job's record, as a JSON list, written there (atomically) at the end; `job`: how each
-    job runs (its method, its second look, ...); `objects`: imported objects by category, each run `jobs`
-    times (seeds seed .. seed + jobs - 1) instead of procedural ones, which come from `split`."""
-    from app.simcell.calibration import ensure_calibration
-
+    `records`: every job's record, as a JSON list in the specs' order, written there (atomically) at the
+    end; `job`: how each job runs (its method, its second look, ...); `objects`: imported objects by
+    category, each run `jobs` times (seeds seed .. seed + jobs - 1) instead of procedural ones, which
+    come from `split`; `cluster`: where the jobs run (app.fanout; one worker: here, in order)."""
     figures: dict = {"method": job.method, "pose": pose, "jobs_per_task": jobs}
     if objects is not None:
         figures = {**figures, "jobs_per_object": jobs, "objects": {c: [o.name for o in v] for c, v in objects.items()}}
         del figures["jobs_per_task"]
     elif split != "test":
         figures["split"] = split
-    every: list[dict] = []
-    rss: list[float] = []  # MiB after each job
-
-    def each(result: JobResult) -> None:
-        rss.append(resident_mb())
-        progress(result)
-
-    with SimCell(cell_config) as cell:
-        T_cam = np.array(cell.camera.config.T_base_cam) if calibration is None else ensure_calibration(cell, calibration)
-        scene = PlanningScene(cell_config)
-        try:
-            for name in tasks:
-                t = task(name)
-                if objects is None:
-                    specs = [JobSpec(t, seed + i, pose, split=split) for i in range(jobs)]
-                else:
-                    specs = [JobSpec(t, seed + i, pose, o) for o in objects[t.category] for i in range(jobs)]
-                results = run_series(cell, scene, T_cam, specs, job, each)
-                figures.update(summarise(name, results))
-                if objects is not None:
-                    figures[f"{name}_per_object"] = per_object(results)
-                every += [r.record() for r in results]
-        finally:
-            scene.close()
+    specs: list[JobSpec] = []
+    for name in tasks:
+        t = task(name)
+        if objects is None:
+            specs += [JobSpec(t, seed + i, pose, split=split) for i in range(jobs)]
+        else:
+            specs += [JobSpec(t, seed + i, pose, o) for o in objects[t.category] for i in range(jobs)]
+    setup = SeriesSetup(cell_config, camera_pose(cell_config, calibration), job)
+    runs: list[JobRun | None] = [None] * len(specs)
+    for outcome in fan_out(run_spec, specs, make_cell_worker, setup, cluster, RECYCLE_AFTER):
+        spec = specs[outcome.index]
+        runs[outcome.index] = failed_job(spec, job, outcome.error) if outcome.failed else outcome.value
+        progress(runs[outcome.index].result)
+    every = []
+    for name in tasks:
+        results = [r.result for r, s in zip(runs, specs) if s.task.name == name]
+        figures.update(summarise(name, results))
+        if objects is not None:
+            figures[f"{name}_per_object"] = per_object(results)
+        every += [r.record() for r in results]
     if records is not None:
         write_json(records, every)
-    figures.update({"resident_mb_after_first_job": round(rss[0], 1), "resident_mb_after_last_job": round(rss[-1], 1),
-                    "resident_mb_max": round(max(rss), 1),
-                    "resident_mb_growth_per_job_second_half": round(growth_mb_per_job(rss), 3)})
-    fresh = [0] + [k * jobs + i for k in range(len(tasks)) for i in range(jobs) if fresh_client_before(i)]
-    if (kept := growth_across_refreshes(rss, fresh)) is not None:
-        figures["resident_mb_growth_per_job_across_refreshes"] = round(kept, 3)
-    figures["resident_mb_every_20_jobs"] = {i: round(rss[i], 1) for i in range(0, len(rss), 20)}  # job index -> MiB
+    figures.update(memory_figures(runs))
     return figures

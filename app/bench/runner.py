@@ -1,4 +1,4 @@
-"""Running a benchmark: worker processes, a results file that grows one trial at a time, resume.
+"""Running a benchmark: trials as Ray tasks (app.fanout), a results file that grows one trial at a time, resume.
 
 `out/run.json` records the run's settings; `out/results.jsonl` gets one line per (trial, method)
 as soon as a trial is done. Starting again with the same settings skips finished trials (a
@@ -7,29 +7,32 @@ refused. Trials run index-major (trial 1 of every task and pose, then trial 2, .
 stopped early - by its `minutes` budget or Ctrl-C - already makes a balanced table. Demo subsets
 (--demos N < 10) and fused-camera demos are written to `out/demos/<task>/` (app.bench.demos), and
 every template is built before the workers start, so that no two workers build the same one.
+The demo folder (templates included) and other field weights travel to the workers as parcels
+(app.fanout.shipping), so a cluster's nodes need only the project installed.
 """
 from __future__ import annotations
 
 import json
-import multiprocessing as mp
-import os
 import time
-from dataclasses import asdict
+from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 from typing import Callable
 
 from app.bench.demos import bench_demos
+from app.fanout.cluster import ClusterConfig
+from app.fanout.run import Outcome, fan_out
+from app.fanout.shipping import Parcel, landed, pack
 from app.bench.protocol import BenchConfig, Trial, trials
 from app.io_utils import write_json
 from app.nift.template import weights_id
 from app.predict.methods import method as method_record
 from app.tasks.demo_library import task_templates
+from app.tasks.demo_library import DEMOS_DIR
 from app.tasks.task import task
-from app.workers import die_with_parent
 
 FORMAT = "nift-bench/1"
 ADDED = {"place_demo_match": "mean", "align_grasp": False, "objects": [], "demo_dir": None}  # settings added since the format, with the value runs made before them had
-_worker = None  # the per-process bench (a world, or the sim cell), made by _init_worker
+RECYCLE_AFTER = 50  # trials a worker process runs before a fresh one replaces it (memory stays bounded)
 
 
 def settings(config: BenchConfig) -> dict:
@@ -104,65 +107,84 @@ def pending(config: BenchConfig, out: Path) -> list[Trial]:
     return [tr for tr in trials(config) if not set(config.methods) <= have.get(tr.key, set())]
 
 
-def _init_worker(config: BenchConfig, demo_root: Path, parent: int | None = None) -> None:
-    """Set up this process's bench (`parent`: the pid of the command that spawned it, which it dies with)."""
-    global _worker
-    import torch
+@dataclass(frozen=True)
+class Shipment:
+    """What every worker needs: the settings, the demo folder (shipped unless it is the project's own,
+    which every node has installed) and other field weights (shipped)."""
 
-    if parent is not None:
-        die_with_parent(parent)
+    config: BenchConfig
+    demos: Parcel | Path
+    fields: Parcel | None = None
+
+
+def shipment(config: BenchConfig, demo_root: Path) -> Shipment:
+    own = demo_root.resolve() == DEMOS_DIR.resolve()
+    return Shipment(config, demo_root if own else pack(demo_root), None if config.nif is None else pack(config.nif))
+
+
+@dataclass
+class Worker:
+    """A worker process's bench (a world, or the sim cell) with the settings and demos it runs trials with."""
+
+    bench: object
+    config: BenchConfig
+    demo_root: Path
+
+    def close(self) -> None:
+        self.bench.close()
+
+
+def make_worker(parcel: Shipment) -> Worker:
+    """Unpack the shipment on this node and build the bench in this process."""
     from app.bench.trial import ExecutedBench, TeleportedBench
 
-    torch.set_num_threads(1)
+    config = parcel.config if parcel.fields is None else replace(parcel.config, nif=str(landed(parcel.fields)))
+    root = parcel.demos if isinstance(parcel.demos, Path) else landed(parcel.demos)
     bench = ExecutedBench if config.setting == "executed" else TeleportedBench
-    _worker = (bench(config.cell, config.objects), config, demo_root)
+    return Worker(bench(config.cell, config.objects), config, root)
 
 
-def _run_trial(trial: Trial) -> list[dict]:
-    bench, config, demo_root = _worker
-    return bench.run(trial, config, demo_root)
+def run_trial(worker: Worker, trial: Trial) -> list[dict]:
+    return worker.bench.run(trial, worker.config, worker.demo_root)
 
 
-def run(config: BenchConfig, out: Path, workers: int = 2, progress: Callable[[int, int], None] = lambda d, n: None,
-        minutes: float | None = None) -> list[dict]:
-    """Run (or finish) a benchmark into `out`; return every row. With `minutes`, stop after that wall time
-    (trials in flight are dropped; running again resumes)."""
+def error_rows(trial: Trial, config: BenchConfig, error: str) -> list[dict]:
+    """A trial whose task raised: a row per method naming the error (not counted as a trial, report.py)."""
+    return [{"trial": trial.key, "task": trial.task, "pose": trial.pose, "index": trial.index, "method": m,
+             "internal_error": error} for m in config.methods]
+
+
+def run(config: BenchConfig, out: Path, workers: int | ClusterConfig = 2,
+        progress: Callable[[int, int, int], None] = lambda d, n, f: None, minutes: float | None = None) -> list[dict]:
+    """Run (or finish) a benchmark into `out`; return every row. `workers`: a count of local processes,
+    or where to run (app.fanout.cluster); `progress(done, total, failed)`. With `minutes`, stop after
+    that wall time (trials in flight are dropped; running again resumes)."""
     deadline = None if minutes is None else time.monotonic() + 60 * minutes
+    cluster = workers if isinstance(workers, ClusterConfig) else ClusterConfig(workers)
     demo_root = prepare(config, out)
     todo = pending(config, out)
     _drop_partial_rows(out, {tr.key for tr in todo})
-    total, done = len(trials(config)), len(trials(config)) - len(todo)
-    progress(done, total)
-    if todo:
-        with open(out / "results.jsonl", "a") as sink:
-            if workers <= 1:
-                _init_worker(config, demo_root)
-                results = map(_run_trial, todo)
-            else:
-                pool = mp.get_context("spawn").Pool(workers, _init_worker, (config, demo_root, os.getpid()))
-                results = pool.imap_unordered(_run_trial, todo)
-            try:
-                for rows in results:
-                    sink.write("".join(json.dumps(r) + "\n" for r in rows))
-                    sink.flush()
-                    done += 1
-                    progress(done, total)
-                    if deadline is not None and time.monotonic() > deadline:
-                        break
-            finally:
-                if workers > 1:
-                    pool.terminate()
-                else:
-                    _close_worker()
+    total, done, failed = len(trials(config)), len(trials(config)) - len(todo), 0
+    progress(done, total, failed)
+    if not todo:
+        return read_rows(out)
+    with open(out / "results.jsonl", "a") as sink:
+        outcomes = fan_out(run_trial, todo, make_worker, shipment(config, demo_root), cluster, RECYCLE_AFTER)
+        try:
+            for outcome in outcomes:
+                sink.write("".join(json.dumps(r) + "\n" for r in _rows(outcome, todo, config)))
+                sink.flush()
+                done, failed = done + 1, failed + outcome.failed
+                progress(done, total, failed)
+                if deadline is not None and time.monotonic() > deadline:
+                    break
+        finally:
+            outcomes.close()  # stops the workers (and a local Ray) when the loop ends early
     return read_rows(out)
 
 
-def _close_worker() -> None:
-    """Free the in-process bench (its physics clients) after a single-process run."""
-    global _worker
-    if _worker is not None:
-        _worker[0].close()
-        _worker = None
+def _rows(outcome: Outcome, todo: list[Trial], config: BenchConfig) -> list[dict]:
+    return error_rows(todo[outcome.index], config, outcome.error) if outcome.failed else outcome.value
 
 
 def _drop_partial_rows(out: Path, keys: set[str]) -> None:

@@ -12,6 +12,7 @@ QUICK = {"trials": 2, "methods": "cpd,ibs-nif", "poses": "upright"}
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
+    from app.console.options import add_cluster_arguments
     from app.nift.imitation_config import DEMO_MATCHES, ImitationConfig
 
     p.add_argument("--tasks", default="mug,bowl,bottle",
@@ -49,7 +50,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    "instead of procedural ones; each task's trials cycle over those of its category")
     p.add_argument("--demo-dir", type=Path, metavar="DIR",
                    help="the directory whose <task>/ folders hold the demos (default: the project's demos/)")
-    p.add_argument("--workers", type=int, default=2, help="worker processes (default 2, one per core)")
+    add_cluster_arguments(p, "trials")
     p.add_argument("--minutes", type=float,
                    help="stop after this wall time and write the table of the trials done (the same command resumes)")
     p.add_argument("--out", type=Path, default=Path("out/bench"), help="results directory (resumes a run there)")
@@ -69,7 +70,7 @@ def run(args: argparse.Namespace) -> int:
     from app.bench.protocol import BenchConfig
     from app.bench.report import write_report
     from app.bench.runner import run as run_bench
-    from app.console.options import check_workers
+    from app.console.options import cluster_of
     from app.io_utils import writable_directory
     from app.nift.field import load_field
     from app.nift.template import field_override
@@ -92,7 +93,7 @@ def run(args: argparse.Namespace) -> int:
                          objects=_names(args.objects or ""),
                          demo_dir=str(args.demo_dir.resolve()) if args.demo_dir else None)
     config.check()  # before the progress bar: the error is the only line
-    check_workers(args.workers)
+    cluster = cluster_of(args)
     writable_directory(args.out, "--out")
     if args.nif is not None:  # the weights load before any work (and before the bar)
         for feature in ("nif", "ndf"):
@@ -101,12 +102,12 @@ def run(args: argparse.Namespace) -> int:
     created = not args.out.exists()
     try:
         with tqdm(unit="trial", desc="bench", disable=args.json) as bar:
-            def progress(done: int, total: int) -> None:
-                bar.total = total
-                bar.n = done
+            def progress(done: int, total: int, failed: int) -> None:
+                bar.total, bar.n = total, done
+                bar.set_postfix(failed=failed, refresh=False)
                 bar.refresh()
 
-            rows = run_bench(config, args.out, args.workers, progress, args.minutes)
+            rows = run_bench(config, args.out, cluster, progress, args.minutes)
     except BaseException:
         if created and not (args.out / "results.jsonl").exists():  # a failed start leaves no half-made folder
             shutil.rmtree(args.out, ignore_errors=True)

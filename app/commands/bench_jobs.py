@@ -5,7 +5,8 @@ import argparse
 from pathlib import Path
 
 from app.categories import POSES
-from app.console.options import add_config_argument, add_job_config_argument, add_second_look_argument
+from app.console.options import (add_cluster_arguments, add_config_argument, add_job_config_argument,
+                                 add_second_look_argument)
 from app.console.output import print_figures
 
 NAME = "bench-jobs"
@@ -30,13 +31,14 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="camera calibration file; if missing, the cell is calibrated first and it is written")
     p.add_argument("--json", action="store_true", help="print the figures as JSON")
     p.add_argument("--records", type=Path, default=None, help="also write every job's record (a JSON list) to this file")
+    add_cluster_arguments(p, "jobs", 1, "one job at a time, so the timings are a cell's own")
     add_second_look_argument(p)
     add_config_argument(p)
     add_job_config_argument(p)
 
 
 def run(args: argparse.Namespace) -> int:
-    from app.console.options import cell_config, job_config
+    from app.console.options import cell_config, cluster_of, job_config
     from app.io_utils import writable_file
     from app.tasks.task import task
 
@@ -46,6 +48,7 @@ def run(args: argparse.Namespace) -> int:
         raise ValueError(f"--jobs must be at least 1, got {jobs}")
     cell_cfg = cell_config(args)  # a bad --config or --job-config fails before the progress bar
     job = job_config(args)
+    cluster = cluster_of(args)
     if args.records is not None:
         writable_file(args.records, "--records")
     objects = None
@@ -62,8 +65,16 @@ def run(args: argparse.Namespace) -> int:
 
     from app.bench.job_series import run_jobs_benchmark
 
-    with tqdm(total=sum(per_task.values()), unit="job", desc="bench-jobs") as bar:
+    failed = 0
+
+    def progress(result) -> None:
+        nonlocal failed
+        failed += not result.success
+        bar.set_postfix(failed=failed, refresh=False)
+        bar.update(1)
+
+    with tqdm(total=sum(per_task.values()), unit="job", desc="bench-jobs", disable=args.json) as bar:
         figures = run_jobs_benchmark(jobs, job, args.pose, args.seed, tasks, cell_cfg, args.calibration,
-                                     lambda r: bar.update(1), args.records, objects, args.split)
+                                     progress, args.records, objects, args.split, cluster)
     print_figures(figures, args.json)
     return 0

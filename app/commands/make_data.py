@@ -5,6 +5,7 @@ import argparse
 from pathlib import Path
 
 from app.categories import SPLIT_NAMES
+from app.console.options import add_cluster_arguments
 from app.console.output import print_figures
 
 NAME = "make-data"
@@ -24,7 +25,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--points", type=int, default=1024, help="points per cloud")
     p.add_argument("--queries", type=int, default=2000, help="labelled query points per instance")
     p.add_argument("--scf-order", type=int, default=10, help="highest SCF band stored (fields use 0..n)")
-    p.add_argument("--workers", type=int, default=2, help="worker processes")
+    add_cluster_arguments(p, "shards")
     p.add_argument("--seed", type=int, default=0, help="picks instances, poses, scales and views")
     p.add_argument("--quick", action="store_true", help="a tiny dataset (CI size)")
     p.add_argument("--json", action="store_true", help="print the figures as JSON")
@@ -43,10 +44,10 @@ def config_from(args: argparse.Namespace):
 
 
 def run(args: argparse.Namespace) -> int:
-    from app.console.options import check_workers
+    from app.console.options import cluster_of
     from app.training.data import make_dataset
 
-    check_workers(args.workers)  # before the data modules load and anything is written
-    report = make_dataset(config_from(args), args.out, workers=args.workers, progress=not args.json)
+    cluster = cluster_of(args)  # before the data modules load and anything is written
+    report = make_dataset(config_from(args), args.out, workers=cluster, progress=not args.json)
     print_figures(report.figures(), args.json)
-    return 0
+    return 1 if report.failed else 0

@@ -91,6 +91,25 @@ def add_second_look_argument(p: argparse.ArgumentParser) -> None:
 MAX_WORKERS = 256
 
 
+def add_cluster_arguments(p: argparse.ArgumentParser, what: str, default: int = 2, why: str = "one per core") -> None:
+    """--workers and --address: how wide a verb fans out on Ray (app.fanout), and where."""
+    p.add_argument("--workers", type=int, default=default,
+                   help=f"{what} run at once on a local Ray (default {default}: {why}; 1: in this process, in order)")
+    p.add_argument("--address", metavar="HOST:PORT", default=None,
+                   help="run on the Ray cluster whose head is there (default $RAY_ADDRESS; unset: a local Ray for this "
+                        "command); its CPUs set the width (docs/scale.md)")
+
+
+def cluster_of(args: argparse.Namespace):  # -> app.fanout.cluster.ClusterConfig
+    """The verb's ClusterConfig from --workers and --address (checked: a one-line error)."""
+    from app.fanout.cluster import check_reachable, cluster_config
+
+    config = cluster_config(check_workers(args.workers), args.address)
+    if config.address is not None:
+        check_reachable(config.address)  # before anything is written
+    return config
+
+
 def check_workers(workers: int) -> int:
     """--workers as given, or a one-line error when it is not a count of processes."""
     if not 1 <= workers <= MAX_WORKERS:

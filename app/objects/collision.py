@@ -64,7 +64,8 @@ def decompose(mesh: trimesh.Trimesh, config: DecompositionConfig = Decomposition
         env = {**os.environ, "PYTHONPATH": os.pathsep.join(filter(None, [code_root, os.environ.get("PYTHONPATH")]))}
         try:
             done = subprocess.run([sys.executable, "-m", "app.objects.collision", str(source), str(parts),
-                                   json.dumps(asdict(config))], env=env, capture_output=True, text=True, timeout=timeout)
+                                   json.dumps(asdict(config)), str(os.getpid())], env=env, capture_output=True,
+                                  text=True, timeout=timeout)
         except subprocess.TimeoutExpired:  # subprocess.run has killed the child
             raise RuntimeError(f"CoACD's convex decomposition ran over {timeout:.0f} s on {len(mesh.faces)} faces and "
                                f"was stopped; try fewer faces (--collision-faces)") from None
@@ -144,5 +145,8 @@ def visual_model(mesh: trimesh.Trimesh) -> Path:
     return path
 
 
-if __name__ == "__main__":  # the child process of `decompose`: SOURCE.npz OUT.obj CONFIG-JSON
+if __name__ == "__main__":  # the child process of `decompose`: SOURCE.npz OUT.obj CONFIG-JSON PARENT-PID
+    from app.workers import die_with_parent
+
+    die_with_parent(int(sys.argv[4]))  # a command killed with SIGKILL leaves no decomposition running
     _decompose_here(Path(sys.argv[1]), Path(sys.argv[2]), DecompositionConfig(**json.loads(sys.argv[3])))

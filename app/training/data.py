@@ -15,21 +15,21 @@ order n trains on bands 0..n (the band powers do not depend on the highest order
 
 Files: `DIR/manifest.json` (format nift-data/1: the config, the shards done, sizes, rates) and
 `DIR/shard-NNNNN.npz`, each written atomically; an interrupted run resumes where it stopped, and
-the same seed gives the same files.
+the same seed gives the same files. Shards are made as Ray tasks (app.fanout) and written here by
+the command, so workers on other machines need no shared disk.
 """
 from __future__ import annotations
 
-import os
 import time
-from concurrent.futures import ProcessPoolExecutor
-from dataclasses import asdict, dataclass
-from multiprocessing import get_context
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Iterator
 
 import numpy as np
 from tqdm import tqdm
 
+from app.fanout.cluster import ClusterConfig
+from app.fanout.run import fan_out
 from app.io_utils import write_json, write_npz
 from app.nift.raycast import scene_of
 from app.nift.scf import compute_scf
@@ -37,7 +37,6 @@ from app.objects import IN_DOMAIN, check_category, generate, split
 from app.objects.families import family_of
 from app.training.manifest import FORMAT, read_manifest
 from app.training.views import CAMERAS, observe
-from app.workers import die_with_parent
 from hardware.se3 import random_rotations
 
 
@@ -124,9 +123,8 @@ def shard_name(index: int) -> str:
     return f"shard-{index:05d}.npz"
 
 
-def make_shard(cfg: DataConfig, index: int, instances: list[tuple[str, int]], out: Path) -> dict:
-    """Generate and atomically write one shard; return its manifest record."""
-    start = time.perf_counter()
+def shard_arrays(cfg: DataConfig, index: int, instances: list[tuple[str, int]]) -> dict[str, np.ndarray]:
+    """One shard's arrays (a function of the config and the shard's index alone)."""
     rng = np.random.default_rng(np.random.SeedSequence([cfg.seed, index]))
     parts = [make_instance(c, s, cfg, rng) for c, s in instances]
     arrays = {
@@ -140,10 +138,26 @@ def make_shard(cfg: DataConfig, index: int, instances: list[tuple[str, int]], ou
         "scale": np.concatenate([p["scale"] for p in parts]),  # (S,)
         "cloud": np.concatenate([p["cloud"] for p in parts]),  # (S, N, 3)
     }
+    return arrays
+
+
+def write_shard(cfg: DataConfig, index: int, instances: list[tuple[str, int]], arrays: dict[str, np.ndarray],
+                out: Path, seconds: float) -> dict:
+    """Atomically write one shard; return its manifest record."""
     path = write_npz(out / shard_name(index), arrays)
     return {"file": path.name, "instances": len(instances), "samples": len(instances) * cfg.views,
             "families": sorted({f"{c}/{family_of(c, s)}" for c, s in instances}),
-            "bytes": path.stat().st_size, "seconds": round(time.perf_counter() - start, 3)}
+            "bytes": path.stat().st_size, "seconds": round(seconds, 3)}
+
+
+def _timed_shard(cfg: DataConfig, job: tuple[int, list[tuple[str, int]]]) -> tuple[dict[str, np.ndarray], float]:
+    """A worker's task: one shard's arrays and the seconds they took."""
+    start = time.perf_counter()
+    return shard_arrays(cfg, *job), time.perf_counter() - start
+
+
+def _same(cfg: DataConfig) -> DataConfig:
+    return cfg
 
 
 def config_to_json(cfg: DataConfig) -> dict:
@@ -159,10 +173,12 @@ class DataReport:
     manifest: dict
     new_samples: int = 0
     seconds: float = 0.0
+    failed: dict[int, str] = field(default_factory=dict)  # shard index -> the error its task raised
 
     def figures(self) -> dict:
         total = self.manifest["shards"]
-        return {
+        failed = {"failed_shards": {str(i): e for i, e in sorted(self.failed.items())}} if self.failed else {}
+        return failed | {
             "out": self.manifest["out"],
             "samples": sum(s["samples"] for s in total),
             "instances": sum(s["instances"] for s in total),
@@ -174,19 +190,22 @@ class DataReport:
         }
 
 
-def run_shards(cfg: DataConfig, shards: list, todo: list[int], out: Path, workers: int) -> Iterator[dict]:
-    """Yield shard records in order; in this process for one worker, else in spawned processes."""
-    if workers <= 1:
-        yield from (make_shard(cfg, i, shards[i], out) for i in todo)
-        return
-    with ProcessPoolExecutor(workers, mp_context=get_context("spawn"), initializer=die_with_parent,
-                             initargs=(os.getpid(),)) as pool:
-        futures = [pool.submit(make_shard, cfg, i, shards[i], out) for i in todo]
-        yield from (f.result() for f in futures)
+def run_shards(cfg: DataConfig, shards: list, todo: list[int], out: Path,
+               cluster: ClusterConfig) -> Iterator[dict | tuple[int, str]]:
+    """Yield, as shards finish (app.fanout), a written shard's record, or (index, error) for a shard whose
+    task raised: nothing of it is written, and running again retries it."""
+    jobs = [(i, shards[i]) for i in todo]
+    for outcome in fan_out(_timed_shard, jobs, _same, cfg, cluster):
+        index, instances = jobs[outcome.index]
+        if outcome.failed:
+            yield index, outcome.error
+            continue
+        arrays, seconds = outcome.value
+        yield write_shard(cfg, index, instances, arrays, out, seconds)
 
 
-def make_dataset(cfg: DataConfig, out: str | Path, workers: int = 2, progress: bool = True) -> DataReport:
-    """Generate (or resume) a dataset in `out`; shards run in `workers` processes."""
+def make_dataset(cfg: DataConfig, out: str | Path, workers: int | ClusterConfig = 2, progress: bool = True) -> DataReport:
+    """Generate (or resume) a dataset in `out`; `workers`: local processes, or where to run (app.fanout)."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     manifest = read_manifest(out)
@@ -203,7 +222,11 @@ def make_dataset(cfg: DataConfig, out: str | Path, workers: int = 2, progress: b
     start, report = time.perf_counter(), DataReport(manifest)
     bar = tqdm(total=sum(len(s) for s in shards), initial=sum(s["instances"] for s in manifest["shards"]),
                unit="inst", disable=not progress, desc="make-data")
-    for record in run_shards(cfg, shards, todo, out, workers):
+    cluster = workers if isinstance(workers, ClusterConfig) else ClusterConfig(workers)
+    for record in run_shards(cfg, shards, todo, out, cluster):
+        if isinstance(record, tuple):
+            report.failed[record[0]] = record[1]
+            continue
         manifest["shards"].append(record)
         manifest["shards"].sort(key=lambda s: s["file"])
         report.new_samples += record["samples"]

@@ -1,0 +1,67 @@
+"""The verbs that fan out, on a real Ray: two local workers write what one process writes (make-data,
+bench-jobs; bench in tests/test_bench.py), and a two-node cluster on this machine runs a bench through
+--address, the demos shipped to it through the object store."""
+import json
+
+import numpy as np
+import psutil
+import pytest
+
+from app.cli import main
+from app.fanout.guard import is_ray
+from app.training.data import DataConfig, make_dataset
+
+pytestmark = pytest.mark.slow
+
+WALL_TIMES = ("seconds", "total_seconds", "planning_seconds")  # what differs between two runs of the same job
+
+
+def timeless(value):
+    """A record without its wall-clock times, at any depth."""
+    if isinstance(value, dict):
+        return {k: timeless(v) for k, v in value.items() if k not in WALL_TIMES}
+    if isinstance(value, list):
+        return [timeless(v) for v in value]
+    return value
+
+
+def test_make_data_on_two_workers_writes_the_bytes_one_process_writes(tmp_path):
+    config = DataConfig(instances=2, views=2, queries=200, shard_instances=1, seed=5)
+    one = make_dataset(config, tmp_path / "one", workers=1, progress=False)
+    two = make_dataset(config, tmp_path / "two", workers=2, progress=False)
+    assert one.manifest["complete"] and two.manifest["complete"] and len(one.manifest["shards"]) == 6
+    for shard in one.manifest["shards"]:
+        a, b = np.load(tmp_path / "one" / shard["file"]), np.load(tmp_path / "two" / shard["file"])
+        assert set(a.files) == set(b.files) and all(np.array_equal(a[k], b[k]) for k in a.files)
+    assert timeless(one.manifest["shards"]) == timeless(two.manifest["shards"])
+
+
+def test_bench_jobs_on_two_workers_records_what_one_process_records(tmp_path, true_calibration):
+    records = {}
+    for workers in (1, 2):
+        records[workers] = tmp_path / f"records-{workers}.json"
+        assert main(["bench-jobs", "--tasks", "bowl", "--jobs", "2", "--workers", str(workers), "--calibration",
+                     str(true_calibration), "--records", str(records[workers]), "--json"]) == 0
+    one, two = (json.loads(records[w].read_text()) for w in (1, 2))
+    assert [r["seed"] for r in one] == [0, 1] and all(r["success"] for r in one)
+    assert timeless(two) == timeless(one)
+
+
+def test_a_two_node_cluster_runs_a_bench_through_its_address(tmp_path, capsys):
+    from ray.cluster_utils import Cluster
+
+    cluster = Cluster(initialize_head=True, head_node_args={"num_cpus": 1, "include_dashboard": False})
+    cluster.add_node(num_cpus=1)
+    try:
+        args = ["bench", "--tasks", "bowl", "--methods", "cpd", "--trials", "2", "--poses", "upright", "--demos", "5",
+                "--json"]  # five demos: a demo folder of the run's own, shipped to the nodes
+        assert main([*args, "--out", str(tmp_path / "cluster"), "--address", cluster.address]) == 0
+        nodes = len(cluster.list_all_nodes())
+    finally:
+        cluster.shutdown()
+    assert main([*args, "--out", str(tmp_path / "here"), "--workers", "1"]) == 0
+    rows = {d: [timeless(json.loads(line)) for line in (tmp_path / d / "results.jsonl").read_text().splitlines()]
+            for d in ("cluster", "here")}
+    assert nodes == 2 and len(rows["here"]) == 2
+    assert sorted(map(json.dumps, rows["cluster"])) == sorted(map(json.dumps, rows["here"]))
+    assert not [p for p in psutil.Process().children(recursive=True) if is_ray(p)]  # nothing of Ray left
