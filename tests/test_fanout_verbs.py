@@ -47,12 +47,21 @@ def test_bench_jobs_on_two_workers_records_what_one_process_records(tmp_path, tr
     assert timeless(two) == timeless(one)
 
 
-def test_a_two_node_cluster_runs_a_bench_through_its_address(tmp_path, capsys):
+def test_a_two_node_cluster_runs_a_bench_through_its_address_and_another_ray_is_refused(tmp_path, monkeypatch):
+    import ray._private.utils
     from ray.cluster_utils import Cluster
+
+    from app.fanout.cluster import ClusterConfig, ClusterError, started
 
     cluster = Cluster(initialize_head=True, head_node_args={"num_cpus": 1, "include_dashboard": False})
     cluster.add_node(num_cpus=1)
     try:
+        ours = ray._private.utils.compute_version_info()
+        with monkeypatch.context() as m:  # this command as if it ran another Ray than the cluster's
+            m.setattr(ray._private.utils, "compute_version_info", lambda: ("2.0.0", ours[1]))
+            with pytest.raises(ClusterError, match=f"--address {cluster.address}: Version mismatch"):
+                with started(ClusterConfig(2, cluster.address)):
+                    pass
         args = ["bench", "--tasks", "bowl", "--methods", "cpd", "--trials", "2", "--poses", "upright", "--demos", "5",
                 "--json"]  # five demos: a demo folder of the run's own, shipped to the nodes
         assert main([*args, "--out", str(tmp_path / "cluster"), "--address", cluster.address]) == 0
@@ -65,3 +74,27 @@ def test_a_two_node_cluster_runs_a_bench_through_its_address(tmp_path, capsys):
     assert nodes == 2 and len(rows["here"]) == 2
     assert sorted(map(json.dumps, rows["cluster"])) == sorted(map(json.dumps, rows["here"]))
     assert not [p for p in psutil.Process().children(recursive=True) if is_ray(p)]  # nothing of Ray left
+
+
+def test_a_set_imported_on_two_workers_stores_what_one_import_stores_and_names_a_bad_file(tmp_path):
+    import trimesh
+
+    from app.fanout.cluster import ClusterConfig
+    from app.objects.library import import_object, load_object
+    from app.objects.shape_set import import_set
+
+    trimesh.creation.cylinder(radius=0.04, height=0.2, sections=24).export(tmp_path / "can.stl")
+    trimesh.creation.box((0.06, 0.04, 0.18)).export(tmp_path / "carton.stl")
+    (tmp_path / "broken.stl").write_bytes(b"solid nothing\nendsolid\n")
+    entries = [("can", "can.stl"), ("carton", "carton.stl"), ("broken", "broken.stl")]
+    (tmp_path / "set.toml").write_text("".join(f'[[object]]\nname = "{n}"\ncategory = "bottle"\nfile = "{f}"\nunits = "m"\n\n'
+                                               for n, f in entries))
+    with pytest.raises(ValueError, match=r"1 of 3 meshes could not be imported \(broken.stl: "):
+        import_set(tmp_path / "set.toml", tmp_path / "ray", cluster=ClusterConfig(2))
+    import_object(tmp_path / "can.stl", "bottle", "can", units="m", directory=tmp_path / "here")
+    there, here = load_object("can", tmp_path / "ray"), load_object("can", tmp_path / "here")
+    assert (tmp_path / "ray" / "carton" / "object.json").is_file() and not (tmp_path / "ray" / "broken").exists()
+    for part in ("mesh.obj", "collision.obj"):
+        assert (tmp_path / "ray" / "can" / part).read_bytes() == (tmp_path / "here" / "can" / part).read_bytes()
+    assert there.collision.read_bytes() == here.collision.read_bytes()
+    assert json.loads((tmp_path / "ray" / "can" / "object.json").read_text())["source"] == str(tmp_path / "can.stl")

@@ -134,12 +134,16 @@ class Worker:
         self.bench.close()
 
 
-def make_worker(parcel: Shipment) -> Worker:
-    """Unpack the shipment on this node and build the bench in this process."""
+def make_worker(sent: Shipment) -> Worker:
+    """Unpack the shipment on this node and build the bench in this process (torch on one thread, in
+    this process too: a worker is a core)."""
+    import torch
+
     from app.bench.trial import ExecutedBench, TeleportedBench
 
-    config = parcel.config if parcel.fields is None else replace(parcel.config, nif=str(landed(parcel.fields)))
-    root = parcel.demos if isinstance(parcel.demos, Path) else landed(parcel.demos)
+    torch.set_num_threads(1)
+    config = sent.config if sent.fields is None else replace(sent.config, nif=str(landed(sent.fields)))
+    root = sent.demos if isinstance(sent.demos, Path) else landed(sent.demos)
     bench = ExecutedBench if config.setting == "executed" else TeleportedBench
     return Worker(bench(config.cell, config.objects), config, root)
 

@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from app.categories import SPLIT_NAMES
+from app.console.options import add_cluster_arguments
 
 NAME = "objects"
 HELP = "render a contact sheet of procedural object instances; import your own meshes (objects import)"
@@ -34,6 +35,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     many.add_argument("set", type=Path, help="a TOML file of [[object]] tables (app.objects.shape_set)")
     many.add_argument("--replace", action="store_true", help="import again the objects already in the library")
     many.add_argument("--json", action="store_true", help="print what each import did as JSON")
+    add_cluster_arguments(many, "meshes")
     actions.add_parser("list", help="list the objects in the local object library ($NIFT_OBJECTS)")
     p.add_argument("--category", default="mug", choices=CATEGORIES, help="object category (default: mug)")
     p.add_argument("--count", type=int, default=16, help="number of instances (default: 16)")
@@ -85,9 +87,10 @@ def import_mesh(args: argparse.Namespace) -> int:
 
 def import_many(args: argparse.Namespace) -> int:
     """`nift objects import-set`: import the set's meshes not in the library yet."""
+    from app.console.options import cluster_of
     from app.objects.shape_set import import_set
 
-    done = import_set(args.set, replace=args.replace)
+    done = import_set(args.set, replace=args.replace, cluster=cluster_of(args))
     if args.json:
         print(json.dumps([{"name": e.name, "category": e.category, "imported": notes is not None,
                            "notes": notes or []} for e, notes in done], indent=2))

@@ -82,6 +82,7 @@ def started(config: ClusterConfig) -> Iterator[None]:
     try:
         ray.init(address=config.address, **common)
     except (ConnectionError, RuntimeError) as exc:  # RuntimeError: Ray's version check
+        ray.shutdown()  # a half-made connection
         raise ClusterError(f"--address {config.address}: {' '.join(str(exc).split())}") from None
     try:
         yield

@@ -115,18 +115,28 @@ def simplified(mesh: trimesh.Trimesh, faces: int = COLLISION_FACES) -> trimesh.T
     return out if out.is_watertight and out.volume > 0 else mesh
 
 
-def import_object(path: str | Path, category: str, name: str, units: str | None = None, up: str = "z",
-                  directory: Path | None = None, replace: bool = False, faces: int = COLLISION_FACES,
-                  config: DecompositionConfig = DecompositionConfig()) -> tuple[LibraryObject, list[str]]:
-    """Read, repair, scale and frame a mesh file, decompose it for collisions and store it by name;
-    (the object, what was done). Nothing is written unless every step succeeds."""
+@dataclass
+class Imported:
+    """A mesh file made into an object, not stored yet: the repaired mesh, its convex parts, its record."""
+
+    info: dict
+    mesh: trimesh.Trimesh
+    parts: list[trimesh.Trimesh]
+    notes: list[str]
+
+
+def check_new(category: str, name: str, root: Path, replace: bool) -> None:
+    """A one-line error for an unknown category, a bad name, or a name taken (without `replace`)."""
     if category not in CATEGORIES:
         raise ValueError(f"unknown object category {category!r}; choose one of {', '.join(CATEGORIES)}")
     check_name(name)
-    root = directory or library_dir()
     if (root / name).exists() and not replace:
         raise ValueError(f"an object named {name!r} is already in {root}; give --replace to overwrite it")
-    path = Path(path)
+
+
+def make_object(path: Path, category: str, units: str | None = None, up: str = "z", faces: int = COLLISION_FACES,
+                config: DecompositionConfig = DecompositionConfig()) -> Imported:
+    """Read, repair, scale and frame a mesh file and decompose it for collisions (writes nothing)."""
     prepared = prepare_mesh(read_mesh(path), units, up, path.name)
     notes = list(prepared.notes)
     start = time.perf_counter()
@@ -134,8 +144,24 @@ def import_object(path: str | Path, category: str, name: str, units: str | None 
     parts = decompose(source, config)
     notes.append(f"collision model: {len(parts)} convex parts from {len(source.faces)} faces "
                  f"in {time.perf_counter() - start:.1f} s (CoACD)")
-    _store(root, name, _info(path, category, prepared, notes), prepared.mesh, parts, replace)
-    return load_object(name, root), notes
+    return Imported(_info(path, category, prepared, notes), prepared.mesh, parts, notes)
+
+
+def store_object(imported: Imported, name: str, root: Path, replace: bool = False) -> LibraryObject:
+    """Write a made object into the library under `name` (atomically: a whole folder or nothing)."""
+    _store(root, name, imported.info, imported.mesh, imported.parts, replace)
+    return load_object(name, root)
+
+
+def import_object(path: str | Path, category: str, name: str, units: str | None = None, up: str = "z",
+                  directory: Path | None = None, replace: bool = False, faces: int = COLLISION_FACES,
+                  config: DecompositionConfig = DecompositionConfig()) -> tuple[LibraryObject, list[str]]:
+    """Read, repair, scale and frame a mesh file, decompose it for collisions and store it by name;
+    (the object, what was done). Nothing is written unless every step succeeds."""
+    root = directory or library_dir()
+    check_new(category, name, root, replace)
+    imported = make_object(Path(path), category, units, up, faces, config)
+    return store_object(imported, name, root, replace), imported.notes
 
 
 def _info(path: Path, category: str, prepared: PreparedMesh, notes: list[str]) -> dict:

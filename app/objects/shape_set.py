@@ -9,7 +9,8 @@
     product = "..."              # optional: what it is modelled after
     package = "pybullet_data"    # optional: `file` is inside this installed Python package instead
 
-The team's real-shape set is `shapes/real/set.toml` (scripts/make_shape_set.py).
+The team's real-shape set is `shapes/real/set.toml` (scripts/make_shape_set.py). The meshes are
+made into objects as Ray tasks (app.fanout; each file shipped to its worker) and stored here.
 """
 from __future__ import annotations
 
@@ -18,7 +19,11 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from app.categories import CATEGORIES
-from app.objects.library import LibraryObject, check_name, import_object, library_dir, load_object, object_names
+from app.fanout.cluster import ClusterConfig
+from app.fanout.run import fan_out
+from app.fanout.shipping import Parcel, landed, pack
+from app.objects.library import (Imported, LibraryObject, check_name, check_new, library_dir, load_object, make_object,
+                                 object_names, store_object)
 
 KEYS = {"name", "category", "file", "units", "up", "product", "package"}
 
@@ -73,19 +78,40 @@ def _package_dir(package: str, path: Path) -> Path:
     return Path(list(spec.submodule_search_locations)[0])
 
 
-def import_set(path: Path, directory: Path | None = None, replace: bool = False) -> list[tuple[SetEntry, list[str] | None]]:
-    """Import every entry not in the library yet (all with `replace`); (entry, the import's notes, None
-    when it was there already) each. A file that cannot be imported stops with its one-line error."""
+def _nothing(payload: None) -> None:
+    return None
+
+
+def _make(_, job: tuple[SetEntry, Parcel]) -> Imported:
+    """A worker's task: one entry's mesh, from its shipped file, made into an object."""
+    e, parcel = job
+    return make_object(landed(parcel), e.category, e.units, e.up)
+
+
+def import_set(path: Path, directory: Path | None = None, replace: bool = False,
+               cluster: ClusterConfig = ClusterConfig(1)) -> list[tuple[SetEntry, list[str] | None]]:
+    """Import every entry not in the library yet (all with `replace`), the meshes made on `cluster`;
+    (entry, the import's notes, None when it was there already) each, in the set's order. A file that
+    cannot be imported is named in a one-line error after the others are stored."""
     root = directory or library_dir()
     have = set(object_names(root))
-    done = []
-    for e in read_set(path):
-        if e.name in have and not replace:
-            done.append((e, None))
+    entries = read_set(path)
+    todo = [e for e in entries if replace or e.name not in have]
+    for e in todo:
+        check_new(e.category, e.name, root, replace)
+    notes: dict[str, list[str]] = {}
+    failed = []
+    for outcome in fan_out(_make, [(e, pack(e.file)) for e in todo], _nothing, None, cluster):
+        e = todo[outcome.index]
+        if outcome.failed:
+            failed.append(f"{e.file.name}: {outcome.error}")
             continue
-        _, notes = import_object(e.file, e.category, e.name, e.units, e.up, root, replace)
-        done.append((e, notes))
-    return done
+        outcome.value.info["source"] = str(e.file.resolve())  # where the user's file is, not the worker's copy
+        store_object(outcome.value, e.name, root, replace)
+        notes[e.name] = outcome.value.notes
+    if failed:
+        raise ValueError(f"{path}: {len(failed)} of {len(todo)} meshes could not be imported ({'; '.join(failed)})")
+    return [(e, notes.get(e.name)) for e in entries]
 
 
 def set_objects(path: Path, directory: Path | None = None) -> dict[str, list[LibraryObject]]:
