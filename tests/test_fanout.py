@@ -48,7 +48,11 @@ def pid_of(state, item: int) -> int:
     return os.getpid()
 
 
-def test_ray_gives_what_this_process_gives_retries_killed_workers_and_recycles_them(tmp_path):
+def test_ray_gives_what_this_process_gives_retries_killed_workers_and_recycles_them(tmp_path, monkeypatch):
+    import ray._private.services
+
+    # a cluster `ray start` left on this machine (another test's, a user's): a local run starts its own
+    monkeypatch.setattr(ray._private.services, "find_bootstrap_address", lambda temp_dir: "127.0.0.1:9")
     items = list(range(8))
     here = {o.index: o.error or o.value for o in in_process(square, items, offset, 10)}
     with started(ClusterConfig(2)):

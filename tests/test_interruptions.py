@@ -100,7 +100,7 @@ def test_bench_killed_at_random_moments_resumes(tmp_path):
     out = tmp_path / "bench"
     rng = np.random.default_rng(2)
     killed = []
-    for _ in range(3):
+    for _ in range(2):
         killed.append(kill_after(nift_process("bench", "--quick", "--tasks", "bowl,bottle", "--out", str(out),
                                               cwd=tmp_path), float(rng.uniform(8.0, 25.0))))  # on a local Ray
         if (out / "results.jsonl").exists():

@@ -72,7 +72,7 @@ def started(config: ClusterConfig) -> Iterator[None]:
                   runtime_env={"env_vars": {n: "1" for n in THREAD_VARIABLES}} if not config.local else None)
     if config.local:
         with guarded():
-            ray.init(num_cpus=config.workers, **common)
+            ray.init(address="local", num_cpus=config.workers, **common)  # never a cluster found on this machine
             try:
                 yield
             finally:
