@@ -9,9 +9,24 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import math
+
 import numpy as np
 
 from hardware.se3 import make_pose, rotvec_to_matrix
+
+FIXTURE_REACH = 1.2  # m from the base: no fixture farther (a UR5 reaches 0.85 m)
+
+
+def checked_vector(name: str, value: tuple, length: int, norm_limit: float, what: str = "m") -> None:
+    """A one-line ValueError unless `value` holds `length` finite numbers whose first three (or all, when
+    fewer) lie within `norm_limit` of the origin."""
+    if len(value) != length or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value):
+        raise ValueError(f"{name} must be {length} numbers, got {list(value)!r}")
+    if not all(math.isfinite(v) for v in value):
+        raise ValueError(f"{name} must be finite, got {list(value)!r}")
+    if (norm := math.hypot(*value[:3])) > norm_limit:
+        raise ValueError(f"{name} {list(value)!r} is {norm:.3g} {what} from the robot base; at most {norm_limit} {what}")
 
 
 @dataclass(frozen=True)
@@ -20,6 +35,12 @@ class CellLayout:
 
     rack_xy_yaw: tuple[float, float, float] = (0.55, 0.40, np.pi)  # peg points back towards the robot
     shelf_xy_yaw: tuple[float, float, float] = (0.50, -0.45, 0.0)
+
+    def __post_init__(self) -> None:
+        for name in ("rack_xy_yaw", "shelf_xy_yaw"):
+            value = getattr(self, name)
+            checked_vector(name, value, 3, math.inf)
+            checked_vector(f"{name}'s x, y", value[:2], 2, FIXTURE_REACH)
 
     def fixture_pose(self, name: str) -> np.ndarray:
         """T_base_fixture of 'rack' or 'shelf'."""

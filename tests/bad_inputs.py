@@ -25,6 +25,9 @@ CORPUS: list[tuple[tuple[str, ...], str]] = [
     (("run", "--task", "mug", "--config", "negative.toml"), "time_step"),
     (("run", "--task", "mug", "--config", "noise.toml"), "camera_noise"),
     (("run", "--task", "mug", "--config", "force.toml"), "contact_force_limit"),
+    (("run", "--task", "mug", "--config", "far-rack.toml"), "rack_xy_yaw's x, y [1e+30, 0.4] is 1e+30 m from the robot base"),
+    (("sim", "--config", "far-eye.toml"), "camera_eye [0.5, 1e+30, 0.5] is 1e+30 m"),
+    (("bench-jobs", "--config", "blind.toml"), "at least 0.1 m apart"),
     (("run", "--task", "mug", "--method", "magic"), "--method"),
     (("run", "--task", "mug", "--devices", "net", "--record", "job.png"), "--record"),
     (("run", "--task", "mug", "--devices", "wifi"), "--devices"),
@@ -146,6 +149,8 @@ def make_inputs(root: Path) -> None:
     files = {"bad.toml": "this is = = not toml", "unknown.toml": "colour = 3\n",
              "string.toml": "[world]\ntime_step = 'fast'\n", "negative.toml": "[world]\ntime_step = -0.01\n",
              "noise.toml": "camera_noise = 'yes'\n", "force.toml": "[arm]\ncontact_force_limit = -5.0\n",
+             "far-rack.toml": "rack_xy_yaw = [1e30, 0.4, 3.14]\n", "far-eye.toml": "camera_eye = [0.5, 1e30, 0.5]\n",
+             "blind.toml": "camera_eye = [0.5, 0.0, 0.05]\n",
              "garbage.json": "{not json", "list.json": "[1, 2, 3]", "poses.json": '{"grasp": 3}', "afile": "x"}
     for name, text in files.items():
         (root / name).write_text(text)

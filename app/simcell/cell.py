@@ -7,9 +7,10 @@ WORKSPACE in front of the robot; the Kinect looks at the workspace from the fron
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
-from app.layout import CellLayout
+from app.layout import CellLayout, checked_vector
 from app.layout import add_fixtures as add_layout_fixtures
 from hardware.sim.arm import SimArm, SimArmConfig
 from hardware.sim.gripper import SimGripper, SimGripperConfig
@@ -18,6 +19,7 @@ from hardware.sim.robot import SimRobot
 from hardware.sim.world import SimWorld, SimWorldConfig
 
 WORKSPACE = ((0.40, 0.62), (-0.12, 0.14))  # x range, y range on the table for spawned objects
+CAMERA_REACH = 5.0  # m from the base: a camera farther sees nothing of the cell at the Kinect's 4.5 m range
 
 
 @dataclass(frozen=True)
@@ -31,6 +33,14 @@ class CellConfig(CellLayout):
     camera_target: tuple[float, float, float] = (0.50, 0.0, 0.05)
     camera_seed: int = 0
     camera_noise: bool = True
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        checked_vector("camera_eye", self.camera_eye, 3, CAMERA_REACH)
+        checked_vector("camera_target", self.camera_target, 3, CAMERA_REACH)
+        if math.dist(self.camera_eye, self.camera_target) < 0.1:
+            raise ValueError(f"camera_eye {list(self.camera_eye)} and camera_target {list(self.camera_target)} "
+                             f"must be at least 0.1 m apart (the camera looks from one at the other)")
 
 
 def add_fixtures(world: SimWorld, config: CellLayout) -> dict[str, int]:
