@@ -149,6 +149,7 @@ def test_nift_teach_web_serves_the_page_and_stops_on_interrupt(tmp_path):
     import signal
     import threading
     import time
+    import urllib.error
     import urllib.request
 
     port = free_port()
@@ -162,11 +163,14 @@ def test_nift_teach_web_serves_the_page_and_stops_on_interrupt(tmp_path):
         deadline, html = time.monotonic() + 240, ""
         while time.monotonic() < deadline and not (html and any("Ctrl-C stops" in line for line in lines)):
             try:  # the user presses Ctrl-C once the page answers and the command has said where it is
-                html = html or urllib.request.urlopen(f"http://127.0.0.1:{port}", timeout=2).read().decode()
-            except OSError:
+                url = next(line.split(" on ", 1)[1].split()[0].rstrip(";") for line in lines if "teach page for" in line)
+                html = html or urllib.request.urlopen(url, timeout=2).read().decode()
+            except (StopIteration, OSError):  # not printed yet, or not answering yet
                 pass
             time.sleep(0.5)
         assert "<html" in html.lower() and proc.poll() is None
+        with pytest.raises(urllib.error.HTTPError, match="403"):  # the page without the URL's token
+            urllib.request.urlopen(f"http://127.0.0.1:{port}/", timeout=5)
     finally:
         proc.send_signal(signal.SIGINT)
         proc.wait(timeout=60)

@@ -30,7 +30,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     web = p.add_argument_group("the teach page (--web)")
     web.add_argument("--web", action="store_true", help="teach by hand in the browser: freedrive, grasp, place, save")
     web.add_argument("--host", default="127.0.0.1", help="address the page is served on (default 127.0.0.1: this "
-                     "machine only; the page has no password)")
+                     "machine only; the page answers only the token in the URL it prints)")
     web.add_argument("--port", type=int, default=8080, help="its port (default 8080)")
     web.add_argument("--object", metavar="NAME", help="teach on an imported object (nift objects import) instead of "
                      "procedural ones")
@@ -88,7 +88,7 @@ def web(args: argparse.Namespace, t, out: Path) -> int:
         T_base_cam = ensure_calibration(cell, args.calibration)
         session = TeachSession(cell, t, out, T_base_cam, source, args.seed)
         page = TeachPage(session, args.host, args.port)
-        where = "" if args.host in ("127.0.0.1", "localhost", "::1") else " (reachable from the network, no password)"
+        where = "" if args.host in ("127.0.0.1", "localhost", "::1") else " (reachable from the network; unencrypted: anyone who sees the URL holds the token)"
         print(f"teach page for {t.name} on {page.url}{where}; demos go to {out}; Ctrl-C stops", flush=True)
         try:
             while not interrupted.wait(1.0):

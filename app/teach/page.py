@@ -18,6 +18,7 @@ import viser
 from app.failures import CellFailure
 from app.objects import generate
 from app.objects.library import load_object
+from app.teach.gate import gated_server, new_token
 from app.teach.session import Step, TeachSession
 from app.teach.view import CellView, pose_of
 from hardware.se3 import invert, pose_to_ur, ur_to_pose
@@ -44,9 +45,10 @@ def ur_text(T: np.ndarray) -> str:
 class TeachPage:
     """The page's controls on a viser server, bound to a session."""
 
-    def __init__(self, session: TeachSession, host: str = "127.0.0.1", port: int = 8080) -> None:
+    def __init__(self, session: TeachSession, host: str = "127.0.0.1", port: int = 8080, token: str | None = None) -> None:
         self.session = session
-        self.server = viser.ViserServer(host=host, port=port, label="NIFT cell - teach", verbose=False)
+        self.token = token or new_token()  # the page answers only its URL's token (app.teach.gate)
+        self.server = gated_server(self.token, host=host, port=port, label="NIFT cell - teach", verbose=False)
         self.view = CellView(self.server, session)
         self._steps = 0
         self.answered = 0  # steps answered so far: the status line starts with the count ("(3) held: ...")
@@ -56,7 +58,7 @@ class TeachPage:
 
     @property
     def url(self) -> str:
-        return f"http://{self.server.get_host()}:{self.server.get_port()}"
+        return f"http://{self.server.get_host()}:{self.server.get_port()}/?token={self.token}"
 
     def stop(self) -> None:
         self.session.cell.world.on_step.remove(self._on_step)
