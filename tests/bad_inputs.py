@@ -117,15 +117,16 @@ CORPUS: list[tuple[tuple[str, ...], str]] = [
     (("bench", "--address", "127.0.0.1:9", "--out", "b"), "127.0.0.1:9"),
     (("make-data", "--address", "no-port-here", "--out", "d"), "no-port-here"),
     # the network
-    (("serve", "--bind", "0.0.0.0"), "--bind"),
+    (("serve", "--add-client", "afile", "--keys", "keys"), "afile"),
     (("serve", "--bind", "not-an-address"), "--bind"),
     (("serve", "--bind", "::1"), "--bind"),
     (("serve", "--devices", "toaster"), "--devices"),
-    (("serve", "--watchdog", "0", "--token-file", "tok"), "watchdog"),
-    (("serve", "--port", "70000", "--token-file", "tok"), "port"),
+    (("serve", "--watchdog", "0", "--keys", "keys"), "watchdog"),
+    (("serve", "--port", "70000", "--keys", "keys"), "port"),
+    (("serve", "--add-client", "no-such.key", "--keys", "keys"), "no-such.key"),
     (("devices", "--timeout", "0"), "--timeout"),
     (("bench-net", "--reads", "0"), "--reads"),
-    (("run", "--task", "mug", "--devices", "net", "--token-file", "missing-token"), "missing-token"),
+    (("run", "--task", "mug", "--devices", "net", "--keys", "missing-keys"), "missing-keys"),
 ]
 
 

@@ -14,7 +14,7 @@ from hardware.interfaces import ProtectiveStopError
 from hardware.net import wire
 from hardware.net.client import DeviceRefusedError, NetArm, NetClient, NetDeviceConfig, NetGripper
 from hardware.net.discovery import DeviceNotFoundError, find
-from hardware.net.token import read_token
+from hardware.net.keys import ClientKeys, as_client, client_keys, make_keys
 from hardware.robot_description import HOME_Q
 
 pytestmark = pytest.mark.hil
@@ -31,15 +31,15 @@ def _port_open(address: str) -> bool:
 @pytest.fixture(scope="module")
 def server(tmp_path_factory):
     """A realtime served cell (motions take their real time, as on a controller)."""
-    token_file = tmp_path_factory.mktemp("hil") / "token"
-    with served_cell(token_file, "--realtime", "--name", "nift-test", "--watchdog", "0.3") as (address, proc):
-        yield address, read_token(token_file), proc
+    keys = tmp_path_factory.mktemp("hil") / "keys"
+    with served_cell(keys, "--realtime", "--name", "nift-test", "--watchdog", "0.3") as (address, proc):
+        yield address, keys, proc
     assert proc.returncode is not None and not _port_open(address)  # nothing left behind
 
 
 def _arm(server, **kw) -> NetArm:
-    address, token, _ = server
-    arm = NetArm(NetDeviceConfig(address=address, token=token, **kw))
+    address, keys, _ = server
+    arm = NetArm(NetDeviceConfig(address=address, keys=keys, **kw))
     arm.connect()
     return arm
 
@@ -67,22 +67,25 @@ def test_a_motion_over_the_network_arrives(arm):
     assert np.abs(arm.getActualQ() - target).max() < 0.01
 
 
-def test_a_wrong_token_is_refused_and_the_arm_does_not_move(server, arm):
-    address, _, _ = server
-    intruder = NetClient(address, "x" * 32, "arm")
-    with pytest.raises(DeviceRefusedError, match="token"):
+def test_a_client_key_the_server_does_not_hold_is_refused_and_the_arm_does_not_move(server, arm, tmp_path):
+    address, keys, _ = server
+    make_keys(tmp_path / "stranger")
+    stranger = client_keys(tmp_path / "stranger")
+    intruder = NetClient(address, ClientKeys(stranger.public, stranger.secret, client_keys(keys).server), "arm")
+    with pytest.raises(DeviceRefusedError, match="refused this client's key"):
         intruder.call("moveJ", FAR)
     intruder.close()
     time.sleep(0.3)
     assert np.abs(arm.getActualQ() - HOME_Q).max() < 1e-3
-    assert any("wrong token" in line for line in server[2].log)  # and it was logged
+    assert any("refused a connection: client key" in line for line in server[2].log)  # and it was logged
 
 
 def test_garbage_and_oversized_messages_get_an_error_reply_and_the_server_keeps_serving(server, arm):
-    address, _, _ = server
+    address, keys, _ = server
     s = zmq.Context.instance().socket(zmq.REQ)
     s.setsockopt(zmq.RCVTIMEO, 5000)
     s.setsockopt(zmq.LINGER, 0)
+    as_client(s, client_keys(keys))  # an allowed client sending garbage
     s.connect(address)
     for payload in (b"\x93garbage", b"\x00" * (wire.MAX_MESSAGE + 1)):
         s.send(payload)
@@ -131,8 +134,8 @@ def test_stopJ_is_answered_while_a_motion_runs(arm, server):
 
 
 def test_the_watchdog_stops_the_arm_when_its_client_falls_silent(server, arm):
-    address, token, _ = server
-    silent = NetClient(address, token, "arm")
+    address, keys, _ = server
+    silent = NetClient(address, client_keys(keys), "arm")
     arm.disconnect()  # the silent client takes the arm
     silent.call("moveJ", FAR, 1.0, 2.0)  # submitted; then the client says nothing more
     time.sleep(1.5)
@@ -174,8 +177,8 @@ def test_contact_detection_over_the_network_stops_at_the_table_without_a_protect
 
 
 def test_the_gripper_is_served_as_well(server):
-    address, token, _ = server
-    g = NetGripper(NetDeviceConfig(address=address, token=token))
+    address, keys, _ = server
+    g = NetGripper(NetDeviceConfig(address=address, keys=keys))
     with g:
         g.open()
         assert abs(g.width - g.stroke) < 0.005 and not g.object_detected
@@ -191,8 +194,8 @@ def test_discovery_finds_devices_by_kind_and_names_what_it_found(server):
 
 
 def test_one_device_can_be_served_alone(tmp_path):
-    with served_cell(tmp_path / "token", "--devices", "gripper", "--no-advertise") as (address, proc):
-        device = NetDeviceConfig(address=address, token=read_token(tmp_path / "token"))
+    with served_cell(tmp_path / "keys", "--devices", "gripper", "--no-advertise") as (address, proc):
+        device = NetDeviceConfig(address=address, keys=tmp_path / "keys")
         with NetGripper(device) as g:
             assert g.stroke > 0.05
         with pytest.raises(DeviceRefusedError, match="serving: nift-sim-gripper"):
@@ -213,8 +216,8 @@ def test_the_whole_job_over_the_network_matches_the_in_process_cell(tmp_path):
     from app.tasks.task import task
     with SimCell(CellConfig()) as cell:  # the camera's true pose (calibration is tested on its own)
         T_base_cam = np.array(cell.camera.config.T_base_cam)
-    with served_cell(tmp_path / "token", "--no-advertise") as (address, proc):
-        device = NetDeviceConfig(address=address, token=read_token(tmp_path / "token"))
+    with served_cell(tmp_path / "keys", "--no-advertise") as (address, proc):
+        device = NetDeviceConfig(address=address, keys=tmp_path / "keys")
         with NetCell(NetCellConfig(device, device, device, device)) as cell:
             [net] = run_remote_series(cell, CellLayout(), task("bowl"), [0], "upright", T_base_cam, JobConfig())
     assert proc.returncode is not None and not _port_open(address)

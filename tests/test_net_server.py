@@ -12,23 +12,29 @@ from hypothesis import strategies as st
 
 from hardware.fake.arm import FakeArm
 from hardware.net import wire
+from hardware.net.keys import as_client, as_server, client_keys, make_keys, server_keys
 from hardware.net.request import MAX_DEPTH
 from hardware.net.server import BUILTIN, DeviceServer, ServerConfig
 from hardware.net.verbs import device_service
 
-TOKEN = "t0ken-for-the-fuzz-" * 2
+@pytest.fixture(scope="module")
+def keys(tmp_path_factory):
+    """A key folder as `nift serve --make-keys` makes it."""
+    folder = tmp_path_factory.mktemp("keys")
+    make_keys(folder)
+    return folder
 
 
 @contextmanager
-def serving():
+def serving(keys):
     """A fake arm served in a thread, and one REQ socket to it."""
     arm = FakeArm()
     arm.connect()
-    server = DeviceServer({"arm": device_service("arm", arm)}, ServerConfig(TOKEN))
+    server = DeviceServer({"arm": device_service("arm", arm)}, ServerConfig(server_keys(keys)))
     server.start()
     thread = threading.Thread(target=server.serve_forever, daemon=True)
     thread.start()
-    sock = connect(server)
+    sock = connect(server, keys)
     try:
         yield server, arm, sock, thread
     finally:
@@ -38,17 +44,18 @@ def serving():
         sock.close()
 
 
-def connect(server: DeviceServer) -> zmq.Socket:
+def connect(server: DeviceServer, keys) -> zmq.Socket:
     sock = zmq.Context.instance().socket(zmq.REQ)
     sock.setsockopt(zmq.RCVTIMEO, 3000)
     sock.setsockopt(zmq.LINGER, 0)
+    as_client(sock, client_keys(keys))
     sock.connect(f"tcp://127.0.0.1:{server.port}")
     return sock
 
 
 @pytest.fixture(scope="module")
-def served():
-    with serving() as s:
+def served(keys):
+    with serving(keys) as s:
         yield s
 
 
@@ -68,17 +75,17 @@ def nested(levels: int) -> bytes:
 
 
 def fields(**override) -> dict[str, bytes]:
-    base = {"v": 1, "token": TOKEN, "client": "fuzz", "device": "arm", "verb": "getActualQ", "args": []}
+    base = {"v": wire.PROTOCOL, "client": "fuzz", "device": "arm", "verb": "getActualQ", "args": []}
     return {k: (v if isinstance(v, bytes) else msgpack.packb(v)) for k, v in {**base, **override}.items()}
 
 
 def still_serving(sock: zmq.Socket, arm: FakeArm) -> None:
-    reply = ask(sock, wire.request(TOKEN, "fuzz", "arm", "getActualQ"))
+    reply = ask(sock, wire.request("fuzz", "arm", "getActualQ"))
     assert reply["ok"] and np.allclose(reply["value"], arm.getActualQ())
 
 
 @pytest.mark.parametrize("case, payload", [
-    ("a version nested 1,000 deep, before any token", raw_request(**fields(v=nested(1000), token=b"\xa1x"))),
+    ("a version nested 1,000 deep", raw_request(**fields(v=nested(1000)))),
     ("a device named by a list", raw_request(**fields(device=msgpack.packb(["arm"])))),
     ("a device named by a map", raw_request(**fields(device=msgpack.packb({"arm": 1})))),
     ("a verb nested deep", raw_request(**fields(verb=nested(900)))),
@@ -90,7 +97,7 @@ def still_serving(sock: zmq.Socket, arm: FakeArm) -> None:
 def test_a_malformed_request_is_answered_as_a_wire_error_and_the_server_serves_on(served, case, payload):
     server, arm, sock, thread = served
     reply = ask(sock, payload)
-    assert not reply["ok"] and reply["error"] in ("WireError", "Unauthorized"), (case, reply)
+    assert not reply["ok"] and reply["error"] == "WireError", (case, reply)
     assert len(reply["message"]) < 300 and "\n" not in reply["message"]
     assert thread.is_alive()
     still_serving(sock, arm)
@@ -98,8 +105,8 @@ def test_a_malformed_request_is_answered_as_a_wire_error_and_the_server_serves_o
 
 def test_an_unexpected_failure_inside_the_server_is_answered_and_the_loop_goes_on(served, monkeypatch):
     server, arm, sock, thread = served
-    monkeypatch.setattr(server, "_handle", lambda payload: {}["no such key"])
-    reply = ask(sock, wire.request(TOKEN, "fuzz", "arm", "getActualQ"))
+    monkeypatch.setattr(server, "_handle", lambda payload, key: {}["no such key"])
+    reply = ask(sock, wire.request("fuzz", "arm", "getActualQ"))
     assert not reply["ok"] and reply["error"] == "InternalError" and "KeyError" in reply["message"]
     monkeypatch.undo()
     assert thread.is_alive()
@@ -110,20 +117,23 @@ SCALARS = st.none() | st.booleans() | st.integers(-2**63, 2**64 - 1) | st.floats
 VALUES = st.recursive(SCALARS, lambda inner: st.lists(inner, max_size=3) | st.dictionaries(st.text(max_size=4), inner, max_size=3),
                       max_leaves=6)
 NOT_A_VERB = st.text(max_size=12).filter(lambda v: v not in device_service("arm", FakeArm()).verbs and v not in BUILTIN)
-KEYS = ("v", "token", "client", "device", "verb", "args")
+FIELDS = ("v", "client", "device", "verb", "args")
 
 
 @st.composite
 def malformed(draw) -> list[bytes]:
     """Ten malformed requests from one drawn request map (Hypothesis's cost is in drawing, so each draw
-    is sent as itself and in eight variants): random bytes, a random value, the map, the map without
-    each of its six fields, with the wrong token and with the right one and a verb the arm does not
-    have (then nothing may move)."""
-    message = {k: draw(VALUES) for k in KEYS if draw(st.booleans())}
+    is sent in ten variants): random bytes, a random value, the drawn map, the map with a valid
+    version, client and device and a verb the arm does not have (then nothing may move), and that map
+    without each of its five fields, and with a wrong version."""
+    message = {k: draw(VALUES) for k in FIELDS if draw(st.booleans())}
     message.update(draw(st.dictionaries(st.text(max_size=6), VALUES, max_size=2)))
-    wrong = {**message, "token": draw(VALUES.filter(lambda t: t != TOKEN))}
-    right = {**message, "token": TOKEN, "verb": draw(NOT_A_VERB | VALUES.filter(lambda v: not isinstance(v, str)))}
-    variants = [wrong, right, *({k: v for k, v in right.items() if k != key} for key in KEYS)]
+    if "verb" in message:  # never, by chance, a verb the arm answers
+        message["verb"] = draw(NOT_A_VERB | VALUES.filter(lambda v: not isinstance(v, str)))
+    near = {**message, "v": wire.PROTOCOL, "client": "fuzz", "device": "arm",
+            "verb": draw(NOT_A_VERB | VALUES.filter(lambda v: not isinstance(v, str)))}
+    variants = [message, near, *({k: v for k, v in near.items() if k != key} for key in FIELDS),
+                {**near, "v": draw(VALUES.filter(lambda v: v != wire.PROTOCOL))}]
     return [draw(st.binary(max_size=64)), msgpack.packb(draw(VALUES)), *map(msgpack.packb, variants)]
 
 
@@ -138,41 +148,42 @@ def test_ten_thousand_malformed_requests_leave_the_server_answering_and_the_arm_
     assert arm.motions == [] and np.allclose(arm.getActualQ(), arm.config.home_q)
 
 
-def test_a_job_result_goes_only_to_the_client_whose_job_it_is():
+def test_a_job_result_goes_only_to_the_client_whose_job_it_is(keys):
     """Another client polling the commander's job is told there is no such job, and the commander still
     collects its own result afterwards."""
-    with serving() as (server, arm, sock, thread):
-        other = connect(server)
+    with serving(keys) as (server, arm, sock, thread):
+        other = connect(server, keys)
         target = np.asarray(arm.getActualQ()) + 0.2
-        job = ask(sock, wire.request(TOKEN, "commander", "arm", "moveJ", target))["value"]["job"]
-        stolen = ask(other, wire.request(TOKEN, "other", "arm", "result", job, 0.02))
+        job = ask(sock, wire.request("commander", "arm", "moveJ", target))["value"]["job"]
+        stolen = ask(other, wire.request("other", "arm", "result", job, 0.02))
         assert not stolen["ok"] and "no job" in stolen["message"]
-        mine = ask(sock, wire.request(TOKEN, "commander", "arm", "result", job, 0.02))
+        mine = ask(sock, wire.request("commander", "arm", "result", job, 0.02))
         assert mine["ok"] and mine["value"]["done"] and mine["value"]["value"] is True
         assert np.allclose(arm.getActualQ(), target)
         other.close()
 
 
-def test_release_puts_back_the_settings_a_client_changed():
+def test_release_puts_back_the_settings_a_client_changed(keys):
     """A commander sets a 0.5 m TCP offset, teach mode and contact detection, then releases: the next
     client finds the server's TCP offset, no teach mode and no contact detection."""
-    with serving() as (server, arm, sock, thread):
+    with serving(keys) as (server, arm, sock, thread):
         tcp0 = np.array(arm.getTCPOffset())
         for verb, *args in (("setTcp", np.array([0, 0, 0.5, 0, 0, 0.0])), ("teachMode",), ("startContactDetection",)):
-            assert ask(sock, wire.request(TOKEN, "first", "arm", verb, *args))["ok"], verb
+            assert ask(sock, wire.request("first", "arm", verb, *args))["ok"], verb
         assert arm.isTeachMode() and np.isclose(arm.getTCPOffset()[2], 0.5)
-        assert ask(sock, wire.request(TOKEN, "first", "arm", "release"))["ok"]
+        assert ask(sock, wire.request("first", "arm", "release"))["ok"]
         assert not arm.isTeachMode() and np.allclose(arm.getTCPOffset(), tcp0) and not arm._detecting
 
 
-def test_a_port_already_in_use_is_an_os_error_naming_it():
-    with serving() as (server, arm, sock, thread):
-        taken = DeviceServer({}, ServerConfig(TOKEN, port=server.port))
+def test_a_port_already_in_use_is_an_os_error_naming_it(keys):
+    with serving(keys) as (server, arm, sock, thread):
+        taken = DeviceServer({}, ServerConfig(server_keys(keys), port=server.port))
         with pytest.raises(OSError, match=f"cannot listen on 127.0.0.1 port {server.port}"):
             taken.start()
+        taken.close()
 
 
-def test_a_rig_verb_that_moves_the_arm_needs_the_arms_commander():
+def test_a_rig_verb_that_moves_the_arm_needs_the_arms_commander(keys):
     """A test rig's motions move the arm (`Service.moves`): a second client is refused Busy and the arm
     does not move; the client that commands the arm may use the rig."""
     from hardware.net.verbs import Service, Verb
@@ -181,17 +192,17 @@ def test_a_rig_verb_that_moves_the_arm_needs_the_arms_commander():
     arm.connect()
     home = np.array(arm.getActualQ())
     rig = Service("sim", arm, {"nudge": Verb(lambda a, _: a.moveJ(home + 0.1), "motion")}, moves=("arm",))
-    server = DeviceServer({"arm": device_service("arm", arm), "rig": rig}, ServerConfig(TOKEN))
+    server = DeviceServer({"arm": device_service("arm", arm), "rig": rig}, ServerConfig(server_keys(keys)))
     server.start()
     thread = threading.Thread(target=server.serve_forever, daemon=True)
     thread.start()
-    commander, other = connect(server), connect(server)
+    commander, other = connect(server, keys), connect(server, keys)
     try:
-        assert ask(commander, wire.request(TOKEN, "commander", "arm", "setTcp", np.array(arm.getTCPOffset())))["ok"]
-        refused = ask(other, wire.request(TOKEN, "other", "rig", "nudge"))
+        assert ask(commander, wire.request("commander", "arm", "setTcp", np.array(arm.getTCPOffset())))["ok"]
+        refused = ask(other, wire.request("other", "rig", "nudge"))
         assert not refused["ok"] and refused["error"] == "Busy" and np.allclose(arm.getActualQ(), home)
-        job = ask(commander, wire.request(TOKEN, "commander", "rig", "nudge"))["value"]["job"]
-        assert ask(commander, wire.request(TOKEN, "commander", "rig", "result", job, 0.02))["value"]["done"]
+        job = ask(commander, wire.request("commander", "rig", "nudge"))["value"]["job"]
+        assert ask(commander, wire.request("commander", "rig", "result", job, 0.02))["value"]["done"]
         assert np.allclose(arm.getActualQ(), home + 0.1)
     finally:
         server.stop()
@@ -201,7 +212,7 @@ def test_a_rig_verb_that_moves_the_arm_needs_the_arms_commander():
         other.close()
 
 
-def test_a_client_whose_server_vanishes_mid_motion_gives_up_within_two_seconds_naming_it():
+def test_a_client_whose_server_vanishes_mid_motion_gives_up_within_two_seconds_naming_it(keys):
     """A server that accepts a motion and then falls silent (as after kill -9): the blocking verb raises
     DeviceConnectionLost naming the server within LOST_AFTER, and every later call fails at once."""
     import time
@@ -211,6 +222,7 @@ def test_a_client_whose_server_vanishes_mid_motion_gives_up_within_two_seconds_n
 
     router = zmq.Context.instance().socket(zmq.ROUTER)
     router.setsockopt(zmq.LINGER, 0)
+    as_server(router, server_keys(keys))  # no authenticator: any client key is let in
     port = router.bind_to_random_port("tcp://127.0.0.1")
 
     def answer_once() -> None:
@@ -218,7 +230,7 @@ def test_a_client_whose_server_vanishes_mid_motion_gives_up_within_two_seconds_n
         router.send_multipart([*head, wire.reply_ok({"job": 1})])  # then silence
 
     threading.Thread(target=answer_once, daemon=True).start()
-    client = NetClient(f"tcp://127.0.0.1:{port}", TOKEN, "arm")
+    client = NetClient(f"tcp://127.0.0.1:{port}", client_keys(keys), "arm")
     try:
         start = time.monotonic()
         with pytest.raises(DeviceConnectionLost, match=f"lost the device server at tcp://127.0.0.1:{port}"):

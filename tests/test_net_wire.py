@@ -1,6 +1,4 @@
-"""The device network's pieces without a server: the wire format, the argument checks, the token file."""
-import os
-import stat
+"""The device network's pieces without a server: the wire format, the argument checks."""
 
 import msgpack
 import numpy as np
@@ -8,7 +6,6 @@ import pytest
 
 from hardware.interfaces import JointLimits
 from hardware.net import checks, wire
-from hardware.net.token import ensure_token, read_token
 
 LIMITS = JointLimits(-np.full(6, 6.0), np.full(6, 6.0), np.full(6, 3.0), np.full(6, 8.0), np.full(6, 60.0))
 
@@ -90,20 +87,12 @@ def test_poses_beyond_the_workspace_are_refused():
         checks.pose([441.0, 0, 0, 0, 0, 0])
 
 
-def test_token_file_is_private_and_reused(tmp_path):
-    path = tmp_path / "cfg" / "token"
-    token = ensure_token(path)
-    assert stat.S_IMODE(path.stat().st_mode) == 0o600 and len(token) >= 16
-    assert ensure_token(path) == token == read_token(path)
-    os.chmod(path, 0o644)
-    with pytest.raises(PermissionError, match="readable by others"):
-        read_token(path)
-
-
-def test_serve_refuses_a_public_address_without_an_explicit_token():
+def test_serve_binds_ipv4_addresses_only():
     from app.commands.serve import check_bind
 
-    check_bind("127.0.0.1", None)
-    with pytest.raises(ValueError, match="--token-file"):
-        check_bind("0.0.0.0", None)
-    check_bind("0.0.0.0", "token")
+    check_bind("127.0.0.1")
+    check_bind("0.0.0.0")
+    with pytest.raises(ValueError, match="IPv4"):
+        check_bind("::1")
+    with pytest.raises(ValueError, match="not an IP address"):
+        check_bind("example.org")

@@ -22,7 +22,7 @@ from app.jobs.remote import NetCell, NetCellConfig, run_remote_series
 from app.layout import CellLayout
 from app.tasks.task import task
 from hardware.net.client import NetClient, NetDeviceConfig
-from hardware.net.token import read_token
+from hardware.net.keys import client_keys
 
 
 def _ms(samples: list[float]) -> tuple[float, float]:
@@ -80,10 +80,10 @@ def run_net_benchmark(reads: int, frames: int, jobs: int, task_name: str = "bowl
     figures: dict = {}
     with SimCell(CellConfig()) as local, tempfile.TemporaryDirectory() as tmp:
         T_base_cam = ensure_calibration(local, calibration)
-        token_file = Path(tmp) / "token"
-        with served_cell(token_file, "--no-advertise") as (address, _):
-            token = read_token(token_file)
-            arm = NetClient(address, token, "arm")
+        key_dir = Path(tmp) / "keys"
+        with served_cell(key_dir, "--no-advertise") as (address, _):
+            keys = client_keys(key_dir)
+            arm = NetClient(address, keys, "arm")
             arm.call("getActualQ")
             lat, _ = _timed(lambda: arm.call("getActualQ"), reads)
             figures["state_read_median_ms"], figures["state_read_p99_ms"] = _ms(lat)
@@ -93,11 +93,11 @@ def run_net_benchmark(reads: int, frames: int, jobs: int, task_name: str = "bowl
                 n += 1
             figures["joint_state_stream_hz"] = round(n / (time.perf_counter() - start), 1)
             arm.close()
-            device = NetDeviceConfig(address=address, token=token)
-            with NetCell(NetCellConfig(device, device, device, NetDeviceConfig(address=address, token=token,
+            device = NetDeviceConfig(address=address, keys=key_dir)
+            with NetCell(NetCellConfig(device, device, device, NetDeviceConfig(address=address, keys=key_dir,
                                                                                motion_timeout=600.0))) as cell:
                 figures["capture_net_median_ms"] = _ms(_timed(cell.camera.capture, frames)[0])[0]
-                camera = NetClient(address, token, "camera")
+                camera = NetClient(address, keys, "camera")
                 sent, frame = _timed(lambda: camera.call("last_frame"), frames)
                 camera.close()
                 if frame["depth"].shape != (424, 512):

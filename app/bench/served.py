@@ -18,11 +18,12 @@ SERVING = re.compile(r"serving (.+) on (tcp://[\d.]+:\d+)")
 
 
 @contextmanager
-def served_cell(token_file: Path, *extra: str, start_timeout: float = 120.0) -> Iterator[tuple[str, subprocess.Popen]]:
-    """(address, process) of a `nift serve --token-file token_file EXTRA...` running until the block ends;
+def served_cell(keys: Path, *extra: str, start_timeout: float = 120.0) -> Iterator[tuple[str, subprocess.Popen]]:
+    """(address, process) of a `nift serve --keys KEYS EXTRA...` running until the block ends (the key
+    folder made on its start);
     `process.log` holds the lines of its log (stderr) so far."""
     command = [sys.executable, "-c", "from app.cli import main; raise SystemExit(main())", "serve",
-               "--token-file", str(token_file), *extra]
+               "--keys", str(keys), *extra]
     env = {**os.environ, "PYTHONUNBUFFERED": "1"}
     proc = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
     errors: list[str] = []

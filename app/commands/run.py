@@ -35,7 +35,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--devices", default="sim", choices=("sim", "net"),
                    help="sim: the simulated cell in this process; net: the devices `nift serve` offers, found with "
                         "zeroconf (give both the same --config)")
-    p.add_argument("--token-file", type=Path, help="shared token of the device servers (--devices net; default: nift serve's)")
+    p.add_argument("--keys", type=Path, help="folder of this client's CURVE keys and the server's public key "
+                                             "(--devices net; default: nift serve's, ~/.config/nift/keys)")
     p.add_argument("--json", action="store_true", help="print the result records as JSON")
     add_second_look_argument(p)
     add_config_argument(p)
@@ -116,7 +117,7 @@ def _run_net(args: argparse.Namespace, t, config) -> list:
     from hardware.net.client import NetDeviceConfig
 
     layout = load_toml(CellLayout, args.config, only_known=True) if args.config else CellLayout()
-    device = NetDeviceConfig() if args.token_file is None else NetDeviceConfig(token_file=args.token_file)
+    device = NetDeviceConfig() if args.keys is None else NetDeviceConfig(keys=args.keys)
     net = NetCellConfig(device, device, device, replace(device, motion_timeout=600.0))
     with NetCell(net) as cell:
         T_base_cam = remote_calibration(cell, args.calibration)

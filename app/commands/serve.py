@@ -17,20 +17,24 @@ DEVICES = ("arm", "gripper", "camera", "sim")
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    from hardware.net.token import DEFAULT_TOKEN_FILE
+    from hardware.net.keys import DEFAULT_KEY_DIR
 
     p.add_argument("--devices", default=",".join(DEVICES),
                    help=f"comma list of what to serve, of {', '.join(DEVICES)} (sim: the test rig that spawns and judges objects)")
     p.add_argument("--bind", default="127.0.0.1",
-                   help="address to listen and advertise on (default loopback; any other needs an explicit --token-file)")
+                   help="address to listen and advertise on (default loopback; every connection is CURVE-encrypted either way)")
     p.add_argument("--port", type=int, default=0, help="TCP port (default: a free one, found by clients through zeroconf)")
-    p.add_argument("--token-file", type=Path, help=f"shared token, mode 0600, written if missing (default {DEFAULT_TOKEN_FILE})")
+    p.add_argument("--keys", type=Path, default=DEFAULT_KEY_DIR,
+                   help=f"folder of the CURVE keys, made if missing (default {DEFAULT_KEY_DIR}; docs/security.md)")
+    p.add_argument("--make-keys", action="store_true", help="make what is missing of the --keys folder, print it, and exit")
+    p.add_argument("--add-client", type=Path, metavar="FILE",
+                   help="allow the client whose public key file (its client.key) is given, and exit")
     p.add_argument("--name", default="nift-sim", help="prefix of the advertised device names (NAME-arm, ...)")
     p.add_argument("--realtime", action="store_true", help="pace the physics to the wall clock, as a real controller moves")
     p.add_argument("--watchdog", type=float, default=0.5,
                    help="seconds of silence from its client after which a running arm motion is stopped")
     p.add_argument("--seed", type=int, default=0, help="camera noise seed (each job reseeds it from its own seed)")
-    p.add_argument("--json", action="store_true", help="print the serving line as JSON (devices, address, token file)")
+    p.add_argument("--json", action="store_true", help="print the serving line as JSON (devices, address, key folder)")
     p.add_argument("--no-advertise", action="store_true", help="do not announce the devices with zeroconf")
     add_config_argument(p)
 
@@ -43,41 +47,40 @@ def _devices(text: str) -> list[str]:
     return names
 
 
-def check_bind(bind: str, token_file: Path | None) -> None:
-    """Loopback, or another address with an explicit token file."""
+def check_bind(bind: str) -> None:
+    """An IPv4 address (discovery announces on IPv4 only), or localhost."""
     try:
         address = None if bind == "localhost" else ipaddress.ip_address(bind)
     except ValueError:
         raise ValueError(f"--bind {bind!r} is not an IP address") from None
     if address is not None and address.version != 4:  # discovery announces on IPv4 only
         raise ValueError(f"--bind {bind}: an IPv4 address is needed (127.0.0.1 for this machine)")
-    loopback = address is None or address.is_loopback
-    if not loopback and token_file is None:
-        raise ValueError(f"--bind {bind} exposes the cell beyond this machine: give the shared token with --token-file too")
 
 
 def run(args: argparse.Namespace) -> int:
     from dataclasses import replace
 
     from app.console.options import cell_config
+    from hardware.net.keys import make_keys, server_keys
     from hardware.net.server import DeviceServer, ServerConfig, check_settings
 
+    if args.make_keys or args.add_client:
+        return _keys(args)
     names = _devices(args.devices)
-    check_bind(args.bind, args.token_file)
+    check_bind(args.bind)
     config = cell_config(args)
     config = replace(config, world=replace(config.world, realtime=args.realtime))
-    check_settings(args.port, args.watchdog)  # before the token file is written and the simulator is imported
+    check_settings(args.port, args.watchdog)  # before the keys are written and the simulator is imported
 
     from app.simcell.cell import SimCell
     from app.simcell.rig import SimRig, rig_service
     from hardware.net.discovery import Advertiser
-    from hardware.net.token import DEFAULT_TOKEN_FILE, ensure_token
     from hardware.net.verbs import device_service
 
-    token_file = args.token_file or DEFAULT_TOKEN_FILE
-    token = ensure_token(token_file)  # written on the first start only
+    made = make_keys(args.keys)  # on the first start only
+    keys = server_keys(args.keys)
     logging.basicConfig(level=logging.INFO, format="%(asctime)s nift serve: %(message)s", stream=sys.stderr)
-    server_config = ServerConfig(token=token, bind=args.bind, port=args.port, watchdog=args.watchdog)
+    server_config = ServerConfig(keys=keys, bind=args.bind, port=args.port, watchdog=args.watchdog)
     signal.signal(signal.SIGTERM, _interrupt)  # a terminated server stops its arm and unregisters, as Ctrl-C does
     with SimCell(config) as cell:
         devices = {"arm": cell.arm, "gripper": cell.gripper, "camera": cell.camera}
@@ -92,8 +95,9 @@ def run(args: argparse.Namespace) -> int:
                 if advertiser:
                     advertiser.advertise(name, svc.kind, port, svc.properties)
             address = f"tcp://{args.bind}:{port}"
-            print(json.dumps({"serving": list(services), "address": address, "token_file": str(token_file)}) if args.json
-                  else f"serving {', '.join(services)} on {address} (token in {token_file}); Ctrl-C stops", flush=True)
+            print(json.dumps({"serving": list(services), "address": address, "keys": str(args.keys)}) if args.json
+                  else f"serving {', '.join(services)} on {address} (CURVE keys in {args.keys}{', made now' if made else ''});"
+                       " Ctrl-C stops", flush=True)
             server.serve_forever()
         except KeyboardInterrupt:
             pass
@@ -101,6 +105,22 @@ def run(args: argparse.Namespace) -> int:
             if advertiser:
                 advertiser.close()
             server.close()
+    return 0
+
+
+def _keys(args: argparse.Namespace) -> int:
+    """--make-keys / --add-client: the key folder's files, made or allowed, printed."""
+    from hardware.net.keys import add_client, make_keys, public_key
+
+    if args.add_client:
+        public_key(args.add_client)  # a key file, or one line before anything is written
+    made = make_keys(args.keys)
+    for path in made:
+        print(f"made {path}")
+    if args.add_client:
+        print(f"allowed {add_client(args.keys, args.add_client)} (a running nift serve reads it at its next start)")
+    elif not made:
+        print(f"{args.keys} already holds the keys")
     return 0
 
 

@@ -5,8 +5,8 @@ interfaces, and python-zeroconf advertises and finds them.
 wire.py       the messages: msgpack, numpy arrays as raw bytes, never pickle
 checks.py     what a request's arguments must be before they reach a device
 verbs.py      which verbs each device kind answers, and how
-server.py     `DeviceServer`: token, one commanding client, motion under a watchdog
+server.py     `DeviceServer`: CURVE keys, one commanding client, motion under a watchdog
 client.py     `NetArm`, `NetGripper`, `NetCamera`
 discovery.py  advertising and browsing with zeroconf
-token.py      the shared token file (mode 0600)
+keys.py       the CURVE key pairs and the allowed client keys (zmq.auth)
 """

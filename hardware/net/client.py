@@ -6,7 +6,9 @@ poll held by the server up to `poll` seconds and answered the moment the job end
 stops the arm within the server's watchdog period. stopJ may be sent from another thread while a
 motion is being waited for. Errors come back as the exceptions the in-process devices raise:
 ProtectiveStopError, DeviceNotConnectedError, ValueError; a refused request raises
-`DeviceRefusedError` and a silent server TimeoutError, each in one line.
+`DeviceRefusedError` and a silent server TimeoutError, each in one line. The socket is a CURVE
+client (`hardware.net.keys`): it speaks only to the server whose public key it holds, and a server
+that refuses its key is named as such (the handshake's failure, read off a socket monitor).
 """
 from __future__ import annotations
 
@@ -23,14 +25,14 @@ import zmq
 from hardware.interfaces import (Arm, CameraIntrinsics, DepthCamera, DeviceConnectionLost, DeviceNotConnectedError, Frame, Gripper,
                                  JointLimits, ProtectiveStopError)
 from hardware.net import wire
-from hardware.net.token import DEFAULT_TOKEN_FILE, read_token
+from hardware.net.keys import DEFAULT_KEY_DIR, ClientKeys, as_client, client_keys
 
 
 LOST_AFTER = 2.0  # s without a reply to a poll (answered within 20 ms while the server lives): the server is gone
 
 
 class DeviceRefusedError(PermissionError):
-    """The server refused a request (wrong token, another client commands the device, ...)."""
+    """The server refused a request or this client's key (another client commands the device, ...)."""
 
 
 ERRORS = {"ProtectiveStopError": ProtectiveStopError, "DeviceNotConnectedError": DeviceNotConnectedError,
@@ -40,12 +42,11 @@ ERRORS = {"ProtectiveStopError": ProtectiveStopError, "DeviceNotConnectedError":
 @dataclass(frozen=True)
 class NetDeviceConfig:
     """Where a networked device is: `address` "tcp://HOST:PORT", or found by `name` (or its kind
-    alone) with zeroconf; the token (given, or read from `token_file`); timeouts in seconds."""
+    alone) with zeroconf; the CURVE keys in `keys` (`hardware.net.keys`); timeouts in seconds."""
 
     name: str | None = None  # the advertised name; None: any device of the kind
     address: str | None = None
-    token: str | None = None
-    token_file: Path = DEFAULT_TOKEN_FILE
+    keys: Path = DEFAULT_KEY_DIR
     timeout: float = 5.0  # s for one reply
     discovery_timeout: float = 3.0
     poll: float = 0.02  # s each poll of a running motion waits on the server (each poll a watchdog kick)
@@ -57,8 +58,8 @@ class NetClient:
     """One REQ socket to a device server; thread-safe; a reply lost to a timeout is dropped
     (REQ_RELAXED, REQ_CORRELATE) so the next request starts clean."""
 
-    def __init__(self, address: str, token: str, device: str, timeout: float = 5.0, session: str | None = None) -> None:
-        self.address, self.token, self.device, self.timeout = address, token, device, timeout
+    def __init__(self, address: str, keys: ClientKeys, device: str, timeout: float = 5.0, session: str | None = None) -> None:
+        self.address, self.device, self.timeout = address, device, timeout
         self.client = session or uuid.uuid4().hex[:12]  # who the server sees: one session commands its devices
         self.note = ""  # the server's note on the last blocking verb (a watchdog stop)
         self.lost = ""  # why the server is taken as gone: every later call fails at once with it
@@ -67,6 +68,8 @@ class NetClient:
         for option, value in ((zmq.LINGER, 0), (zmq.REQ_RELAXED, 1), (zmq.REQ_CORRELATE, 1),
                               (zmq.RCVTIMEO, int(timeout * 1000)), (zmq.SNDTIMEO, int(timeout * 1000))):
             s.setsockopt(option, value)
+        as_client(s, keys)
+        self._monitor = s.get_monitor_socket(zmq.EVENT_HANDSHAKE_FAILED_AUTH | zmq.EVENT_HANDSHAKE_FAILED_PROTOCOL)
         s.connect(address)
         self._socket = s
 
@@ -81,12 +84,15 @@ class NetClient:
             try:
                 if deadline is not None:
                     self._socket.setsockopt(zmq.RCVTIMEO, int(deadline * 1000))
-                self._socket.send(wire.request(self.token, self.client, self.device, verb, *args))
+                self._socket.send(wire.request(self.client, self.device, verb, *args))
                 reply = wire.unpack(self._socket.recv())
             except zmq.Again:
+                if self._handshake_refused():
+                    raise DeviceRefusedError(f"{self.device} at {self.address} refused this client's key: add its "
+                                             "client.key to the server (nift serve --add-client FILE)") from None
                 if deadline is None:
                     raise TimeoutError(f"no reply from {self.device} at {self.address} to {verb} within "
-                                       f"{self.timeout:g} s (is `nift serve` running?)") from None
+                                       f"{self.timeout:g} s (is `nift serve` running, with this server key?)") from None
                 self.lost = (f"lost the device server at {self.address}: {self.device} did not answer a {verb} "
                              f"poll within {deadline:g} s")
                 raise DeviceConnectionLost(self.lost) from None
@@ -117,9 +123,18 @@ class NetClient:
         except Exception:  # noqa: BLE001 - best effort (closing, stopping after a timeout)
             pass
 
+    def _handshake_refused(self) -> bool:
+        """The server turned this client's key away (a CURVE handshake failed on this socket)."""
+        try:
+            return bool(self._monitor.poll(0))
+        except zmq.ZMQError:
+            return False
+
     def close(self) -> None:
         with self._lock:
             if self._socket is not None:
+                self._socket.disable_monitor()
+                self._monitor.close(0)
                 self._socket.close(0)
                 self._socket = None
 
@@ -127,14 +142,14 @@ class NetClient:
 def open_client(config: NetDeviceConfig, kind: str) -> tuple[NetClient, dict]:
     """A connected client of the configured device and its hello: found with zeroconf when no
     address is given; a one-line error when the kind does not match."""
-    token = config.token or read_token(config.token_file)
+    keys = client_keys(config.keys)
     address, device = config.address, config.name or kind
     if address is None:
         from hardware.net.discovery import find
 
         found = find(kind, config.name, config.discovery_timeout)
         address, device = found.address, found.name
-    client = NetClient(address, token, device, config.timeout, config.session)
+    client = NetClient(address, keys, device, config.timeout, config.session)
     try:
         hello = client.call("hello")
     except Exception:

@@ -19,10 +19,9 @@ NAME = Annotated[str, msgspec.Meta(min_length=1, max_length=100)]
 
 
 class Request(msgspec.Struct, forbid_unknown_fields=True, frozen=True):
-    """{"v", "token", "client", "device", "verb", "args"} of `hardware.net.wire`."""
+    """{"v", "client", "device", "verb", "args"} of `hardware.net.wire`."""
 
     v: int
-    token: Annotated[str, msgspec.Meta(max_length=1024)]
     client: NAME
     device: NAME
     verb: NAME

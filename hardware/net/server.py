@@ -1,10 +1,12 @@
 """`DeviceServer`: devices behind one ZeroMQ ROUTER socket.
 
-Every request is checked for its shape first (`hardware.net.request`: no field is used before), carries
-the shared token (refused and logged without it; the device does not move) and is checked before it
-reaches a device (`hardware.net.checks`, in the verb tables of
-`hardware.net.verbs`); a malformed or oversized message gets an error reply and the server keeps
-serving. One client commands a device at a time: the first to send it a command holds it until it
+The socket is a CURVE server (`hardware.net.keys`): a client whose public key is not in the allowed
+list fails the handshake in ZeroMQ's authenticator, so none of its bytes reach this code, and every
+connection is encrypted with its own session keys (a captured session replayed is not a handshake).
+Every request is then checked for its shape (`hardware.net.request`: no field is used before) and
+before it reaches a device (`hardware.net.checks`, in the verb tables of `hardware.net.verbs`); a
+malformed or oversized message gets an error reply and the server keeps serving. A client is its
+key and the session it names, so no key can speak for another's session. One client commands a device at a time: the first to send it a command holds it until it
 says "release" or stays silent for `lease` seconds with nothing running; another client may read
 its state, and stop it, but not command it. Motions run on one motion thread (the simulated
 devices share one physics world), so the socket keeps answering while they run: state reads,
@@ -15,7 +17,6 @@ comes the moment the motion ends).
 """
 from __future__ import annotations
 
-import hmac
 import itertools
 import logging
 import threading
@@ -26,8 +27,11 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import zmq
+import zmq.auth
+from zmq.auth.thread import ThreadAuthenticator
 
 from hardware.net import wire
+from hardware.net.keys import ServerKeys, as_server
 from hardware.net.request import parse
 from hardware.net.verbs import Service
 
@@ -43,26 +47,39 @@ MAX_WAIT = 0.02  # s a "result" poll may wait for its job: it answers the moment
 class ServerConfig:
     """Where the server listens and how it guards its devices."""
 
-    token: str
+    keys: ServerKeys
     bind: str = "127.0.0.1"
     port: int = 0  # 0: a free port, chosen at start
     watchdog: float = 0.5  # s: default silence after which a running arm motion is stopped
     lease: float = 10.0  # s: a silent commanding client with nothing running gives up control
 
     def __post_init__(self) -> None:
-        if not isinstance(self.token, str) or len(self.token) < 16:
-            raise ValueError("the device server needs a token of at least 16 characters")
         check_settings(self.port, self.watchdog, self.lease)
 
 
 def check_settings(port: int, watchdog: float, lease: float = 10.0) -> None:
-    """A one-line error for a port, watchdog or lease out of range (before any token is written)."""
+    """A one-line error for a port, watchdog or lease out of range (before any key is written)."""
     if not 0 <= port <= 65535:
         raise ValueError(f"--port must be in [0, 65535], got {port}")
     if not 0.0 < watchdog <= 60.0:
         raise ValueError(f"--watchdog must be in (0, 60] s, got {watchdog}")
     if not 0.0 < lease <= 3600.0:
         raise ValueError(f"lease must be in (0, 3600] s, got {lease}")
+
+
+class AllowedKeys:
+    """The client public keys in a folder (read at start): zmq.auth asks it about each handshake."""
+
+    def __init__(self, folder) -> None:
+        self.folder = folder
+        self.keys = set(zmq.auth.load_certificates(str(folder)))  # z85 public keys
+
+    def callback(self, domain: str, key: bytes) -> bool:
+        """Whether the client holding public key `key` (z85) may connect; a refusal is logged."""
+        allowed = key in self.keys
+        if not allowed:
+            LOG.warning("refused a connection: client key %s... is not in %s", key[:8].decode(errors="replace"), self.folder)
+        return allowed
 
 
 class Refused(Exception):
@@ -102,14 +119,19 @@ class DeviceServer:
     def __post_init__(self) -> None:
         self._ids = itertools.count(1)
         self._stop = threading.Event()
-        self._context = zmq.Context.instance()
+        self._context = zmq.Context()  # its own: one authenticator per context
+        self._auth: ThreadAuthenticator | None = None
         self._socket: zmq.Socket | None = None
         self._worker = ThreadPoolExecutor(max_workers=1, thread_name_prefix="nift-motion")
 
     # lifecycle ---------------------------------------------------------------------------------
     def start(self) -> int:
         """Bind the socket; the port it listens on."""
+        self._auth = ThreadAuthenticator(self._context, log=LOG.getChild("auth"))
+        self._auth.start()
+        self._auth.configure_curve_callback(domain="*", credentials_provider=AllowedKeys(self.config.keys.clients))
         s = self._context.socket(zmq.ROUTER)
+        as_server(s, self.config.keys)
         s.setsockopt(zmq.LINGER, 0)
         s.setsockopt(zmq.MAXMSGSIZE, 4 * wire.MAX_MESSAGE)  # far larger: the peer is cut off, never buffered
         try:
@@ -138,6 +160,9 @@ class DeviceServer:
         if self._socket is not None:
             self._socket.close(0)
             self._socket = None
+        if self._auth is not None:
+            self._auth.stop()
+            self._auth = None
 
     def serve_forever(self, poll_ms: int = 10) -> None:
         """Answer requests until `stop()`; check the watchdog between them."""
@@ -155,18 +180,18 @@ class DeviceServer:
         messages queued while this server was busy has not been silent."""
         for _ in range(most):
             try:
-                frames = self._socket.recv_multipart(zmq.NOBLOCK)
+                frames = self._socket.recv_multipart(zmq.NOBLOCK, copy=False)
             except zmq.Again:
                 return
             self._answer(frames)
 
     # one request -------------------------------------------------------------------------------
-    def _answer(self, frames: list[bytes]) -> None:
+    def _answer(self, frames: list[zmq.Frame]) -> None:
         if len(frames) < 2:
             return  # no return address: nothing can be answered
         head, payload = frames[:-1], frames[-1]
         try:
-            reply = wire.reply_ok(self._handle(payload))
+            reply = wire.reply_ok(self._handle(payload.bytes, payload.get("User-Id")))
         except Refused as r:
             reply = wire.reply_error(r.name, str(r))
         except wire.WireError as exc:
@@ -180,12 +205,10 @@ class DeviceServer:
         except zmq.ZMQError as exc:
             LOG.warning("reply not sent: %s", exc)
 
-    def _handle(self, payload: bytes) -> Any:
+    def _handle(self, payload: bytes, key: str) -> Any:
+        """The value of one request from the client holding CURVE key `key` (z85, set by the authenticator)."""
         request = parse(wire.unpack(payload))  # the shape first: no field is used before it is checked
-        client = request.client
-        if not hmac.compare_digest(request.token.encode(), self.config.token.encode()):
-            LOG.warning("refused a request from client %r: wrong token", client[:40])
-            raise Refused("Unauthorized", "wrong or missing token: request refused")
+        client = f"{key[:8]}/{request.client}"
         if request.v != wire.PROTOCOL:
             raise Refused("ProtocolError", f"protocol version {request.v}; this server speaks {wire.PROTOCOL}")
         device, verb, args = self._resolve(request.device), request.verb, request.args

@@ -6,7 +6,7 @@ is the extension type ARRAY holding [dtype, shape, bytes] for the few dtypes the
 (joint vectors, trajectories, depth and colour frames), so a 512 x 424 depth frame is its 868 kB
 and not a JSON list. Nothing is ever unpickled: an unknown extension, dtype or size is refused.
 
-    request  {"v": PROTOCOL, "token": str, "client": str, "device": str, "verb": str, "args": [...]}
+    request  {"v": PROTOCOL, "client": str, "device": str, "verb": str, "args": [...]}
     reply    {"ok": true, "value": ...}  or  {"ok": false, "error": NAME, "message": str}
 """
 from __future__ import annotations
@@ -16,7 +16,7 @@ from typing import Any
 import msgpack
 import numpy as np
 
-PROTOCOL = 1
+PROTOCOL = 2  # 2: no token field (CURVE authenticates the connection)
 ARRAY = 1  # msgpack extension code of a numpy array
 DTYPES = ("<f8", "<f4", "|u1", "<u2", "<i8", "|b1")  # the only array types on the wire
 MAX_MESSAGE = 16 * 1024 * 1024  # bytes: a larger request gets an error reply
@@ -74,10 +74,9 @@ def unpack(data: bytes) -> dict:
     return message
 
 
-def request(token: str, client: str, device: str, verb: str, *args: Any) -> bytes:
+def request(client: str, device: str, verb: str, *args: Any) -> bytes:
     """A request as bytes."""
-    return pack({"v": PROTOCOL, "token": token, "client": client, "device": device, "verb": verb,
-                 "args": list(args)})
+    return pack({"v": PROTOCOL, "client": client, "device": device, "verb": verb, "args": list(args)})
 
 
 def reply_ok(value: Any = None) -> bytes:
