@@ -118,6 +118,9 @@ CORPUS: list[tuple[tuple[str, ...], str]] = [
     (("make-data", "--address", "no-port-here", "--out", "d"), "no-port-here"),
     # the network
     (("serve", "--add-client", "afile", "--keys", "keys"), "afile"),
+    (("run", "--task", "mug", "--rerun", "nodir/job.rrd"), "nodir"),
+    (("run", "--task", "mug", "--rerun", "job.txt"), ".rrd"),
+    (("run", "--task", "mug", "--rerun", "/sys/job.rrd"), "/sys"),
     (("serve", "--bind", "not-an-address"), "--bind"),
     (("serve", "--bind", "::1"), "--bind"),
     (("serve", "--devices", "toaster"), "--devices"),

@@ -98,9 +98,10 @@ def predictor_of(*grasps: np.ndarray, place=None, calls: list | None = None):
     return predict
 
 
-def run(cell: Cell, scene: PlanningScene, predictor, config: JobConfig = JobConfig(), hooks=None) -> JobResult:
+def run(cell: Cell, scene: PlanningScene, predictor, config: JobConfig = JobConfig(), hooks=None,
+        job_log=None) -> JobResult:
     return run_job(task("bottle"), cell.arm, cell.gripper, cell.camera, cell.camera.config.T_base_cam,
-                   CellLayout().fixture_pose("shelf"), scene, config, hooks, predictor)
+                   CellLayout().fixture_pose("shelf"), scene, config, hooks, predictor, job_log=job_log)
 
 
 def after_close(cell: Cell, nth: int) -> None:

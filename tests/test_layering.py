@@ -29,7 +29,7 @@ FLOORS = {  # module prefix -> floor; the longest matching prefix decides
     "app.tasks": 7, "app.layout": 7, "app.perception": 7,
     "app.predict": 8, "app.motion": 8,
     "app.jobs": 9, "app.training": 9,
-    "app.simcell": 10,
+    "app.simcell": 10, "app.recording": 10,
     "app.bench": 11, "app.console": 11, "app.teach": 11,
     "app.commands": 12,
     "app.cli": 13,

@@ -102,6 +102,7 @@ class SeriesSetup:
     cell: CellConfig
     T_base_cam: np.ndarray
     job: JobConfig
+    rerun: Path | None = None  # a folder: each job's recording written there (`recording_name`)
 
 
 @dataclass
@@ -139,9 +140,32 @@ def run_spec(worker: CellWorker, spec: JobSpec) -> JobRun:
     if fresh_client_before(worker.jobs):
         worker.cell.refresh()
         worker.scene.rebuild()
-    result = run_sim_job(worker.cell, worker.scene, worker.setup.T_base_cam, spec, worker.setup.job)
+    job_log = None
+    if worker.setup.rerun is not None:
+        from app.recording.target import open_log
+
+        job_log = open_log(worker.setup.rerun / recording_name(spec), recording_name(spec).removesuffix(".rrd"))
+    result = run_sim_job(worker.cell, worker.scene, worker.setup.T_base_cam, spec, worker.setup.job, job_log=job_log)
     worker.jobs += 1
     return JobRun(result, resident_mb(), os.getpid(), worker.jobs - 1)
+
+
+def recording_name(spec: JobSpec) -> str:
+    """The file of a job's recording in a `--rerun` folder: task, object (if imported), pose and seed."""
+    what = spec.task.name if spec.source is None else f"{spec.task.name}-{spec.source.name}"
+    return f"{what}-{spec.pose}-{spec.seed:04d}.rrd"
+
+
+def recordings_index(specs: list[JobSpec], results: list[JobResult]) -> dict:
+    """The `--rerun` folder's index: every job's recording and outcome, and the failed ones by stage."""
+    jobs = [{"file": recording_name(s), "task": s.task.name, "seed": s.seed, "success": r.success,
+             "failed_stage": r.failed_stage, "failure_kind": r.failure_kind, "reason": r.reason}
+            for s, r in zip(specs, results)]
+    by_stage: dict[str, list[str]] = {}
+    for j in jobs:
+        if not j["success"]:
+            by_stage.setdefault(j["failed_stage"] or "verdict", []).append(j["file"])
+    return {"jobs": jobs, "failures_by_stage": by_stage}
 
 
 def failed_job(spec: JobSpec, job: JobConfig, error: str) -> JobRun:
@@ -188,13 +212,15 @@ def run_jobs_benchmark(jobs: int = 20, job: JobConfig = JobConfig(), pose: str =
                        tasks: tuple[str, ...] = ("mug", "bowl", "bottle"), cell_config: CellConfig = CellConfig(),
                        calibration: Path | None = None, progress: Callable[[JobResult], None] = lambda r: None,
                        records: Path | None = None, objects: dict[str, list] | None = None,
-                       split: str = "test", cluster: ClusterConfig = ClusterConfig(1)) -> dict:
+                       split: str = "test", cluster: ClusterConfig = ClusterConfig(1),
+                       rerun: Path | None = None) -> dict:
     """Run `jobs` jobs per task (seeds seed .. seed + jobs - 1) and summarise them; the camera pose
     comes from the `calibration` file (calibrating first if it is missing), or is the true one;
     `records`: every job's record, as a JSON list in the specs' order, written there (atomically) at the
     end; `job`: how each job runs (its method, its second look, ...); `objects`: imported objects by
     category, each run `jobs` times (seeds seed .. seed + jobs - 1) instead of procedural ones, which
-    come from `split`; `cluster`: where the jobs run (app.fanout; one worker: here, in order)."""
+    come from `split`; `cluster`: where the jobs run (app.fanout; one worker: here, in order); `rerun`: a
+    folder for each job's Rerun recording and their index (`index.json`, failures by stage)."""
     figures: dict = {"method": job.method, "pose": pose, "jobs_per_task": jobs}
     if objects is not None:
         figures = {**figures, "jobs_per_object": jobs, "objects": {c: [o.name for o in v] for c, v in objects.items()}}
@@ -208,7 +234,7 @@ def run_jobs_benchmark(jobs: int = 20, job: JobConfig = JobConfig(), pose: str =
             specs += [JobSpec(t, seed + i, pose, split=split) for i in range(jobs)]
         else:
             specs += [JobSpec(t, seed + i, pose, o) for o in objects[t.category] for i in range(jobs)]
-    setup = SeriesSetup(cell_config, camera_pose(cell_config, calibration), job)
+    setup = SeriesSetup(cell_config, camera_pose(cell_config, calibration), job, rerun)
     runs: list[JobRun | None] = [None] * len(specs)
     for outcome in fan_out(run_spec, specs, make_cell_worker, setup, cluster, RECYCLE_AFTER):
         spec = specs[outcome.index]
@@ -223,5 +249,8 @@ def run_jobs_benchmark(jobs: int = 20, job: JobConfig = JobConfig(), pose: str =
         every += [r.record() for r in results]
     if records is not None:
         write_json(records, every)
+    if rerun is not None:
+        write_json(rerun / "index.json", recordings_index(specs, [r.result for r in runs]))
+        figures["recordings"] = str(rerun)
     figures.update(memory_figures(runs))
     return figures

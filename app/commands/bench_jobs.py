@@ -31,6 +31,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="camera calibration file; if missing, the cell is calibrated first and it is written")
     p.add_argument("--json", action="store_true", help="print the figures as JSON")
     p.add_argument("--records", type=Path, default=None, help="also write every job's record (a JSON list) to this file")
+    p.add_argument("--rerun", metavar="DIR", help="write every job's Rerun recording to DIR, with index.json: the "
+                                                   "failed jobs by stage (docs/recording.md)")
     add_cluster_arguments(p, "jobs", 1, "one job at a time, so the timings are a cell's own")
     add_second_look_argument(p)
     add_config_argument(p)
@@ -51,6 +53,11 @@ def run(args: argparse.Namespace) -> int:
     cluster = cluster_of(args)
     if args.records is not None:
         writable_file(args.records, "--records")
+    rerun = None
+    if args.rerun is not None:
+        from app.recording.target import check_target
+
+        rerun = check_target(args.rerun, "--rerun", folder=True)
     objects = None
     if args.objects is not None:
         from app.objects.shape_set import named_objects
@@ -75,6 +82,6 @@ def run(args: argparse.Namespace) -> int:
 
     with tqdm(total=sum(per_task.values()), unit="job", desc="bench-jobs", disable=args.json) as bar:
         figures = run_jobs_benchmark(jobs, job, args.pose, args.seed, tasks, cell_cfg, args.calibration,
-                                     progress, args.records, objects, args.split, cluster)
+                                     progress, args.records, objects, args.split, cluster, rerun)
     print_figures(figures, args.json)
     return 0

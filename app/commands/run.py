@@ -37,6 +37,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                         "zeroconf (give both the same --config)")
     p.add_argument("--keys", type=Path, help="folder of this client's CURVE keys and the server's public key "
                                              "(--devices net; default: nift serve's, ~/.config/nift/keys)")
+    p.add_argument("--rerun", nargs="?", const="spawn", metavar="FILE.rrd",
+                   help="record each job for the Rerun viewer: to FILE.rrd (a series: FILE-00.rrd, ...), or, without "
+                        "a file, to a viewer it spawns (docs/recording.md)")
     p.add_argument("--json", action="store_true", help="print the result records as JSON")
     add_second_look_argument(p)
     add_config_argument(p)
@@ -52,6 +55,10 @@ def run(args: argparse.Namespace) -> int:
         raise ValueError("--record and --gui need the simulated cell in this process (--devices sim)")
     if args.devices == "sim":
         cell_config(args)  # a bad --config fails here, in a second, not after the job path's imports
+    if args.rerun is not None:
+        from app.recording.target import check_target
+
+        args.rerun_path = check_target(args.rerun)  # before the job starts
 
     from app.tasks.task import task
 
@@ -101,7 +108,7 @@ def _run_sim(args: argparse.Namespace, t, config, source=None) -> list:
         T_base_cam = ensure_calibration(cell, args.calibration)
         scene = PlanningScene(cell_cfg)
         try:
-            return run_series(cell, scene, T_base_cam, specs, config, report, args.record)
+            return run_series(cell, scene, T_base_cam, specs, config, report, args.record, job_log=_job_log(args))
         finally:
             scene.close()
             bar.close()
@@ -123,7 +130,16 @@ def _run_net(args: argparse.Namespace, t, config) -> list:
         T_base_cam = remote_calibration(cell, args.calibration)
         on_result = (lambda r: print(_line(r), flush=True)) if args.jobs > 1 and not args.json else (lambda r: None)
         return run_remote_series(cell, layout, t, [args.seed + i for i in range(args.jobs)], args.pose, T_base_cam,
-                                 config, on_result)
+                                 config, on_result, job_log=_job_log(args))
+
+
+def _job_log(args: argparse.Namespace):
+    """Job i's log: a Rerun recording with --rerun (`app.recording`), else none."""
+    if args.rerun is None:
+        return lambda i: None
+    from app.recording.target import numbered, open_log
+
+    return lambda i: open_log(numbered(args.rerun_path, i, args.jobs), f"seed-{args.seed + i}")
 
 
 def _report(results: list, args: argparse.Namespace, t) -> int:

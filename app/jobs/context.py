@@ -1,13 +1,15 @@
 """One job's devices, settings and record, passed between its steps (`app.jobs.job`)."""
 from __future__ import annotations
 
-from dataclasses import dataclass
+from contextlib import contextmanager
+from dataclasses import dataclass, field
 from functools import cached_property
 from typing import Callable
 
 import numpy as np
 import trimesh
 
+from app.jobs.log import JobLog
 from app.jobs.record import JobHooks, JobResult, stage
 from app.jobs.settings import JobConfig, is_hang
 from app.layout import fixture_meshes
@@ -48,10 +50,26 @@ class JobContext:
     first: Frame | None = None  # the first frame: the fixture without the object
     points: np.ndarray | None = None  # the last look's object points (M, 3) before resampling
     fell: bool = False  # a place missed or a grasp slipped: looks cover the table around the fixture (`JobConfig.fallen_perception`)
+    log: JobLog = field(default_factory=JobLog)
 
+    @contextmanager
     def stage(self, name: str):
-        """Time stage `name`; a failure in it is recorded as this stage's (`app.jobs.record.stage`)."""
-        return stage(self.result, name, self.hooks)
+        """Time stage `name`; a failure in it is recorded as this stage's (`app.jobs.record.stage`); the
+        log hears of its start and its end, with the arm's state then."""
+        self.log.stage(name, "started")
+        try:
+            with stage(self.result, name, self.hooks):
+                yield
+        except BaseException:
+            self._log_end(name, "failed")
+            raise
+        self._log_end(name, "ended")
+
+    def _log_end(self, name: str, event: str) -> None:
+        if self.log.active:
+            self.log.arm_state(self.arm.getActualQ(), self.arm.getActualTCPPose(), self.gripper.width,
+                               self.arm.getActualTCPForce())
+        self.log.stage(name, event)
 
     @cached_property
     def hang(self) -> DemoHang:

@@ -39,6 +39,7 @@ def look_and_place(job: JobContext, planner: Planner, plan, chosen: Candidate, o
         if views is not None:
             points = np.concatenate([job.points, *views])
             fused = resample(points, len(cloud), job.config.perception.seed)
+            job.log.cloud(points, "second look")
             # the carried object's model: what the first look saw and what the held views show
             job.scene.add_cloud(OBJECT, np.concatenate([job.scene.solids[OBJECT], *views]))
             starts = np.stack([c.T_base_fixture_seen for c in first])

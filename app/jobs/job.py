@@ -38,6 +38,7 @@ from app.jobs.context import JobContext, Placer, Predictor
 from app.jobs.guarded import guarded_leave, guarded_line, guarded_place, guarded_set_down
 from app.jobs.held_place import look_and_place
 from app.jobs.hold import holding, object_axis, on_object
+from app.jobs.log import JobLog, LoggedCamera
 from app.jobs.motion_meter import MeteredArm
 from app.jobs.record import STAGES, JobHooks, JobResult, check_held, ur
 from app.jobs.settings import JobConfig, looks_again
@@ -76,16 +77,20 @@ APPROACH_ARRIVED = 0.007  # m: an approach stopped by a contact this close to th
 def run_job(t: Task, arm: Arm, gripper: Gripper, camera: DepthCamera, T_base_cam: np.ndarray,
             T_base_fixture: np.ndarray, scene: PlanningScene, config: JobConfig = JobConfig(),
             hooks: JobHooks | None = None, predictor: Predictor | None = None,
-            placer: Placer | None = None) -> JobResult:
+            placer: Placer | None = None, job_log: JobLog | None = None) -> JobResult:
     """Run one pick-and-place job of task t; never raises for a failed stage - it is in the result, with
     its kind (`app.failures`); an exception that is no CellFailure is a bug: the result says
     "internal_error", the traceback goes to the log, and the arm is made safe as after a failure.
 
     `predictor(cloud)` gives the grasp and place; by default the configured method on the task's demos.
     A job that takes the second look (`config.second_look`; template methods only) chooses the place
-    again with `placer(held cloud, grasp, starts)`; by default the method imitates it again."""
-    hooks = hooks or JobHooks()
+    again with `placer(held cloud, grasp, starts)`; by default the method imitates it again. `job_log` hears
+    what the job sees and does as it happens (`app.jobs.log`)."""
+    hooks, job_log = hooks or JobHooks(), job_log or JobLog()
     result = JobResult(t.name, config.method)
+    job_log.begin(t, config.method, arm.getTimestamp)
+    if job_log.active:
+        camera = LoggedCamera(camera, job_log, T_base_cam)
     use_threads(config.threads)
     kin = UR5Kinematics(tcp_offset=ur_to_pose(arm.getTCPOffset()))
     settings = config.predict
@@ -102,7 +107,7 @@ def run_job(t: Task, arm: Arm, gripper: Gripper, camera: DepthCamera, T_base_cam
     metered = MeteredArm(arm)  # what the job moved, for the record
     try:
         _run(JobContext(t, metered, gripper, camera, T_base_cam, T_base_fixture, scene, kin, config, hooks, predictor,
-                        result, placer))
+                        result, placer, log=job_log))
         result.arm = "home"
     except CellFailure as exc:
         result.reason, result.failure_kind = str(exc), exc.kind
@@ -117,6 +122,7 @@ def run_job(t: Task, arm: Arm, gripper: Gripper, camera: DepthCamera, T_base_cam
     finally:
         scene.remove(OBJECT)
         result.motion = metered.record()
+    job_log.end(result)
     return result
 
 
@@ -171,6 +177,7 @@ def _observe(job: JobContext) -> np.ndarray:
         job.points = object_points(frame, job.T_base_cam, cfg, job.fixture_meshes if job.fell else ())
         cloud = resample(job.points, cfg.n_points, cfg.seed)
         job.scene.add_cloud(OBJECT, cloud, eye=job.T_base_cam[:3, 3])
+        job.log.cloud(job.points, "fallen" if job.fell else "first look")
     return cloud
 
 
@@ -190,6 +197,7 @@ def _imitate(job: JobContext, cloud: np.ndarray) -> list:
     in the record at once."""
     with job.stage("imitate"):
         pred = job.predictor(cloud)
+        job.log.prediction(pred)
         options = [replace(c, T_base_tcp=seated(c.T_base_tcp, cloud, job.config.table_z))
                    for c in pred.options()]
         if job.looks_for_hole():
@@ -228,6 +236,7 @@ def _plan(job: JobContext, planner: Planner, options: list, cloud: np.ndarray):
                 raise exc from None
         job.result.candidates += choice.tried
         plan = choice.plan
+        job.log.chosen(choice.candidate, plan, job.kin)
         job.result.notes += plan.notes
         job.result.poses["grasp"] = ur(plan.T_base_grasp)
         if plan.T_base_place is not None:  # a pick alone keeps the first look's predicted place in the record

@@ -13,6 +13,7 @@ from typing import Callable
 import numpy as np
 
 from app.jobs.job import JobConfig, JobHooks, JobResult, run_job
+from app.jobs.log import JobLog
 from app.layout import CellLayout
 from app.motion.scene import PlanningScene
 from app.predict.methods import ORACLE
@@ -97,19 +98,21 @@ def _oracle(cell: NetCell) -> Callable[[np.ndarray], Prediction]:
 
 def run_remote_series(cell: NetCell, layout: CellLayout, t: Task, seeds: list[int], pose: str, T_base_cam: np.ndarray,
                       config: JobConfig = JobConfig(), on_result: Callable[[JobResult], None] = lambda r: None,
-                      scene: PlanningScene | None = None) -> list[JobResult]:
+                      scene: PlanningScene | None = None,
+                      job_log: Callable[[int], JobLog | None] = lambda i: None) -> list[JobResult]:
     """One job per seed on the networked cell; the planning scene (`scene`, or one built here) is
-    of `layout`, which must be the served cell's (the same --config on both sides)."""
+    of `layout`, which must be the served cell's (the same --config on both sides); `job_log(i)` hears
+    job i (the arm's state at each stage's end: a networked cell has no physics loop to sample)."""
     own = scene is None
     scene = PlanningScene(layout) if own else scene
     results = []
     try:
-        for seed in seeds:
+        for i, seed in enumerate(seeds):
             info = cell.rig_run("prepare", t.name, seed, pose)
             oracle = _oracle(cell) if method_record(config.method).true_poses else None
             try:
                 result = run_job(t, cell.arm, cell.gripper, cell.camera, T_base_cam, layout.fixture_pose(t.fixture),
-                                 scene, config, RigHooks(cell), oracle)
+                                 scene, config, RigHooks(cell), oracle, job_log=job_log(i))
             finally:
                 cell.rig_run("clear")
             result.info = {**info, "devices": "net"}

@@ -14,6 +14,7 @@ from typing import Callable
 import numpy as np
 
 from app.jobs.job import JobConfig, JobHooks, JobResult, Predictor, run_job
+from app.jobs.log import JobLog
 from app.motion.scene import PlanningScene
 from app.objects import split
 from app.objects.library import LibraryObject
@@ -21,6 +22,7 @@ from app.predict.methods import method as method_record
 from app.simcell.cell import SimCell
 from app.simcell.judges import resting_verdict
 from app.simcell.oracle import REVOLUTION, TURNS, oracle_prediction
+from app.simcell.sampling import sampled
 from app.simcell.snapshots import save_strip, snapshot
 from app.simcell.spawn import SCALE_RANGE, SpawnedObject, release, spawn
 from app.tasks.task import Task
@@ -103,9 +105,12 @@ def oracle_predictor(cell: SimCell, obj: SpawnedObject, t: Task) -> Predictor:
 
 def run_sim_job(cell: SimCell, scene: PlanningScene, T_base_cam: np.ndarray, spec: JobSpec,
                 config: JobConfig = JobConfig(), record: Path | None = None, hooks_type: type[SimHooks] = SimHooks,
-                predictor_of: Callable[[SpawnedObject], Predictor] | None = None) -> JobResult:
-    """Spawn the spec's object, run the job, remove the object; the strip goes to `record`
+                predictor_of: Callable[[SpawnedObject], Predictor] | None = None,
+                job_log: JobLog | None = None) -> JobResult:
+    """Spawn the spec's object, run the job, remove the object; the strip goes to `record`, what the job
+    saw and did to `job_log`, with the controller's state sampled from the physics loop
     (`hooks_type`, `predictor_of(object)`: other simulator hooks and poses, for tests)."""
+    job_log = job_log or JobLog()
     obj = start_job(cell, spec)
     hooks = hooks_type(cell, obj, spec.task, record is not None)
     try:
@@ -116,8 +121,9 @@ def run_sim_job(cell: SimCell, scene: PlanningScene, T_base_cam: np.ndarray, spe
             predictor = predictor_of(obj)
         elif method_record(config.method).true_poses:
             predictor = oracle_predictor(cell, obj, spec.task)
-        result = run_job(spec.task, cell.arm, cell.gripper, cell.camera, T_base_cam, T_base_fixture, scene, config,
-                         hooks, predictor)
+        with sampled(cell, job_log):
+            result = run_job(spec.task, cell.arm, cell.gripper, cell.camera, T_base_cam, T_base_fixture, scene, config,
+                             hooks, predictor, job_log=job_log)
         if not result.success:
             hooks.keyframe(f"failed at {result.failed_stage}")
     finally:
@@ -140,8 +146,10 @@ def fresh_client_before(i: int, every: int = REFRESH_EVERY) -> bool:
 
 def run_series(cell: SimCell, scene: PlanningScene, T_base_cam: np.ndarray, specs: list[JobSpec],
                config: JobConfig = JobConfig(), on_result: Callable[[JobResult], None] = lambda r: None,
-               record: Path | None = None, refresh_every: int = REFRESH_EVERY) -> list[JobResult]:
-    """Run jobs one after the other; `record` (a .png) gets one strip per job, numbered if several;
+               record: Path | None = None, refresh_every: int = REFRESH_EVERY,
+               job_log: Callable[[int], JobLog | None] = lambda i: None) -> list[JobResult]:
+    """Run jobs one after the other; `record` (a .png) gets one strip per job, numbered if several, and
+    `job_log(i)` the log of job i;
     every `refresh_every` jobs the cell and the planning scene start from fresh PyBullet clients,
     which is what frees the shapes of the objects spawned so far."""
     results = []
@@ -150,6 +158,6 @@ def run_series(cell: SimCell, scene: PlanningScene, T_base_cam: np.ndarray, spec
             cell.refresh()
             scene.rebuild()
         path = record if record is None or len(specs) == 1 else record.with_name(f"{record.stem}-{i:02d}{record.suffix}")
-        results.append(run_sim_job(cell, scene, T_base_cam, spec, config, path))
+        results.append(run_sim_job(cell, scene, T_base_cam, spec, config, path, job_log=job_log(i)))
         on_result(results[-1])
     return results
