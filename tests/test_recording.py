@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from app.recording.layout import outcome_colour
 from app.recording.target import check_target, numbered
 from test_job_branches import Cell, grasp, predictor_of, run  # noqa: F401 - the fixtures `cell` and `scene` too
 from test_job_branches import cell, scene  # noqa: F401
@@ -54,7 +55,7 @@ def test_the_recording_holds_the_layouts_entities(recorded):
     expected = {"/world/cloud/first_look", "/world/camera", "/camera/image", "/camera/depth", "/world/prediction/grasp",
                 "/world/nit/grasp", "/world/nit/place", "/world/plan/grasp", "/world/plan/path/carry", "/world/tcp",
                 "/plots/joints/j1", "/plots/joints/j6", "/plots/gripper/width", "/plots/tool/force", "/job/stages",
-                "/job/verdict", "/robot/joints/elbow_joint"}
+                "/job/verdict", "/robot/joints/elbow_joint", "/world/fixtures/0"}
     assert expected <= set(rows), sorted(expected - set(rows))
     assert any(p.startswith("/robot") and "ur5" in p for p in rows)  # the URDF's meshes
 
@@ -84,14 +85,17 @@ def test_the_logged_tcp_at_the_grasp_is_the_records_grasp_pose(recorded):
     assert np.allclose(R, T[:3, :3], atol=1e-3)
 
 
-def test_one_candidate_entity_per_candidate_of_the_record_coloured_by_outcome(recorded):
+def test_one_candidate_entity_per_candidate_of_the_record_with_its_outcome(recorded):
     record, rows = recorded
     drawn = sorted(p for p in rows if p.startswith("/world/candidates/") and
                    any("LineStrips3D:strips" in r for r in rows[p]))
     assert len(drawn) == len(record["candidates"]) >= 2
     for path, c in zip(drawn, record["candidates"]):
-        [row] = [r for r in rows[path] if "LineStrips3D:labels" in r]
-        assert row["LineStrips3D:labels"][0] == c["outcome"][:80]
+        [row] = [r for r in rows[path] if "outcome" in r]
+        assert row["outcome"] == [c["outcome"]]
+        [drawn_row] = [r for r in rows[path] if "LineStrips3D:colors" in r]
+        red, green, blue = outcome_colour(c["outcome"])
+        assert drawn_row["LineStrips3D:colors"][0] == (red << 24) | (green << 16) | (blue << 8) | 255  # RGBA, packed
 
 
 def test_a_job_without_a_recording_never_imports_rerun():

@@ -39,6 +39,7 @@ from app.jobs.guarded import guarded_leave, guarded_line, guarded_place, guarded
 from app.jobs.held_place import look_and_place
 from app.jobs.hold import holding, object_axis, on_object
 from app.jobs.log import JobLog, LoggedCamera
+from app.layout import fixture_meshes
 from app.jobs.motion_meter import MeteredArm
 from app.jobs.record import STAGES, JobHooks, JobResult, check_held, ur
 from app.jobs.settings import JobConfig, looks_again
@@ -91,6 +92,7 @@ def run_job(t: Task, arm: Arm, gripper: Gripper, camera: DepthCamera, T_base_cam
     job_log.begin(t, config.method, arm.getTimestamp)
     if job_log.active:
         camera = LoggedCamera(camera, job_log, T_base_cam)
+        job_log.fixtures(fixture_meshes(scene.layout))
     use_threads(config.threads)
     kin = UR5Kinematics(tcp_offset=ur_to_pose(arm.getTCPOffset()))
     settings = config.predict

@@ -30,6 +30,9 @@ class JobLog:
     def begin(self, t: Task, method: str, clock: Callable[[], float]) -> None:
         """The job starts: its task, its method, and the clock its events are stamped with."""
 
+    def fixtures(self, meshes: list) -> None:
+        """The cell's fixtures (trimesh meshes, base frame), once per job."""
+
     def stage(self, name: str, event: str) -> None:
         """Stage `name` "started", "ended" or "failed"."""
 

@@ -56,6 +56,12 @@ class RerunJobLog(JobLog):
         self._now()
         self.rec.log(L.STAGES, rr.TextLog(f"job: {t.name} by {method}"))
 
+    def fixtures(self, meshes: list) -> None:
+        for i, mesh in enumerate(meshes):
+            self._world(f"{L.FIXTURES}/{i}", rr.Mesh3D(vertex_positions=mesh.vertices, triangle_indices=mesh.faces,
+                                                       vertex_normals=mesh.vertex_normals, albedo_factor=L.FIXTURE_COLOUR),
+                        static=True)
+
     def stage(self, name: str, event: str) -> None:
         now = self._now()
         self.events.append((now, name, event))
@@ -96,9 +102,10 @@ class RerunJobLog(JobLog):
         self._send_samples()
         for i, c in enumerate(result.candidates):
             strips = L.gripper_outline(ur_to_pose(c["grasp"])) + L.gripper_outline(ur_to_pose(c["place"]))
-            self._world(f"{L.CANDIDATES}/{i:03d}", rr.LineStrips3D(strips, colors=L.outcome_colour(c["outcome"]),
-                                                                  labels=[c["outcome"][:80]] + [""] * (len(strips) - 1)),
-                        static=True)
+            path = f"{L.CANDIDATES}/{i:03d}"
+            self._world(path, rr.LineStrips3D(strips, colors=L.outcome_colour(c["outcome"])), static=True)
+            self.rec.log(path, rr.AnyValues(outcome=c["outcome"], score=c["score"], grasp_rank=c["grasp_rank"],
+                                            place_rank=c["place_rank"]), static=True)
         verdict = "succeeded" if result.success else f"failed at {result.failed_stage} ({result.failure_kind}): {result.reason}"
         self.rec.log(L.VERDICT, rr.TextDocument(f"{result.task} by {result.method}: {verdict}\n\n"
                                                 f"```json\n{json.dumps(result.record(), indent=1, default=str)}\n```",
@@ -123,8 +130,8 @@ class RerunJobLog(JobLog):
 
     def _log_nit(self, candidate) -> None:
         """The templates' query points at the chosen pair: the grasp's in the TCP frame at the grasp, the
-        place's in the fixture frame where the object sits in that fixture's frame now."""
-        for name, T in (("grasp", candidate.T_base_tcp), ("place", candidate.T_base_fixture_seen)):
+        place's in the frame of the fixture the object is placed on."""
+        for name, T in (("grasp", candidate.T_base_tcp), ("place", candidate.T_base_fixture)):
             if name in self.templates:
                 self._world(f"{L.NIT}/{name}", rr.Points3D(transform_points(T, self.templates[name]), radii=0.003,
                                                           colors=L.GREEN if name == "grasp" else L.BLUE))

@@ -8,12 +8,13 @@ import numpy as np
 from hardware.se3 import transform_points
 
 WORLD = "world"  # CoordinateFrame("base"): the UR base frame
+FIXTURES = "world/fixtures"  # /<i>: the rack, the shelf, ... as meshes
 CAMERA = "world/camera"  # the camera's eye and viewing direction
 IMAGES = "camera"  # /image (RGB), /depth (m): each frame the camera captured
 CLOUD = "world/cloud"  # /<look>: the object's points from each look
 PREDICTION = "world/prediction"  # /grasp, /place: the method's first answer
 NIT = "world/nit"  # /grasp, /place: the templates' query points at the chosen pair
-CANDIDATES = "world/candidates"  # /<i>: every pair looked at, coloured by outcome, its reason as label
+CANDIDATES = "world/candidates"  # /<i>: every pair looked at, coloured by outcome; its outcome (the reason) as a value
 PLAN = "world/plan"  # /<segment>: the TCP's path along each planned segment
 TCP = "world/tcp"  # the TCP as the arm reported it
 ROBOT = "robot"  # the URDF's meshes; /joints/<joint>: the joints' transforms
@@ -25,6 +26,7 @@ VERDICT = "job/verdict"  # the outcome, and the record as JSON
 TIMELINES = ("sim", "wall")  # the arm's clock (s); seconds since the job began
 
 GREEN, RED, BLUE, GREY = (40, 200, 80), (220, 60, 50), (60, 120, 255), (160, 160, 160)
+FIXTURE_COLOUR = (150, 110, 70)
 
 
 def gripper_outline(T_base_tcp: np.ndarray, opening: float = 0.085, finger: float = 0.05,
@@ -43,20 +45,23 @@ def outcome_colour(outcome: str) -> tuple[int, int, int]:
 
 
 def blueprint():
-    """The viewer's layout: the 3-D scene beside the camera image, and time plots of joints and forces."""
+    """The viewer's layout: the 3-D scene beside the stage log, the camera image, and time plots of the
+    joints, the gripper's width and the tool's force, on the arm's clock."""
     import rerun.blueprint as rrb
 
     return rrb.Blueprint(
         rrb.Horizontal(
             rrb.Spatial3DView(name="cell", origin="/"),
             rrb.Vertical(
+                rrb.TextLogView(name="stages", origin=STAGES),
                 rrb.Spatial2DView(name="camera", origin=f"{IMAGES}/image"),
                 rrb.TimeSeriesView(name="joints (rad)", origin=JOINTS),
                 rrb.TimeSeriesView(name="gripper width (m)", origin=GRIPPER_WIDTH),
                 rrb.TimeSeriesView(name="tool force (N)", origin=TOOL_FORCE),
-                rrb.TextLogView(name="stages", origin=STAGES),
+                row_shares=[2, 2, 1, 1, 1],
             ),
             column_shares=[3, 2],
         ),
+        rrb.TimePanel(timeline="sim"),
         collapse_panels=True,
     )
