@@ -121,6 +121,8 @@ CORPUS: list[tuple[tuple[str, ...], str]] = [
     (("run", "--task", "mug", "--rerun", "nodir/job.rrd"), "nodir"),
     (("run", "--task", "mug", "--rerun", "job.txt"), ".rrd"),
     (("run", "--task", "mug", "--rerun", "/sys/job.rrd"), "/sys"),
+    (("teach", "--task", "mug", "--rerun"), "--web"),
+    (("bench-jobs", "--quick", "--rerun", "no-such-dir"), "no-such-dir"),
     (("serve", "--bind", "not-an-address"), "--bind"),
     (("serve", "--bind", "::1"), "--bind"),
     (("serve", "--devices", "toaster"), "--devices"),

@@ -131,3 +131,41 @@ def test_the_index_of_a_series_groups_its_failed_jobs_by_stage():
     assert index["failures_by_stage"] == {"place": ["mug-upright-0001.rrd", "mug-upright-0003.rrd"],
                                           "grasp": ["mug-upright-0002.rrd"]}
     assert [j["success"] for j in index["jobs"]] == [True, False, False, False]
+
+
+def test_a_teach_in_session_is_recorded_step_by_step(tmp_path):
+    """A session on the simulated cell, its steps told to a `SessionRecording`: one stage-log line per
+    step (a refused one too), the TCP after the guide at the grasp, and the saved demo's grasp."""
+    from app.recording.session_log import SessionRecording, session_path
+    from app.simcell.cell import CellConfig, SimCell
+    from app.tasks.task import task, teacher_grasp, teacher_place
+    from app.teach.session import TeachSession
+    from hardware.se3 import invert
+
+    path = session_path(tmp_path / "bowl", now=0.0)
+    assert path.parent == tmp_path and path.name.startswith("bowl-session-") and path.suffix == ".rrd"
+    with SimCell(CellConfig()) as cell:
+        session = TeachSession(cell, task("bowl"), tmp_path / "bowl", np.array(cell.camera.config.T_base_cam))
+        recording = SessionRecording(path)
+        session.observers.append(recording.step)
+        try:
+            assert session.new_object(instance=None).ok
+            obj = session.current.obj
+            grasp = session.current.T_base_obj @ teacher_grasp(obj.mesh)
+            assert session.guide(grasp).ok and session.close_gripper().ok
+            with pytest.raises(ValueError):
+                session.close_gripper()  # refused: already held
+            place = session.T_base_fixture @ teacher_place(task("bowl"), obj.mesh, obj.scale)
+            assert session.guide(place @ invert(session.current.T_tcp_obj)).ok and session.release().ok
+            assert session.save_demo().ok
+        finally:
+            recording.close()
+            session.close()
+    rows = read_back(path)
+    lines = [r["TextLog:text"][0] for r in sorted(rows["/job/stages"], key=lambda r: r["step"])]
+    assert [line.split(":")[0] for line in lines] == ["new_object", "guide", "close_gripper", "close_gripper",
+                                                      "guide", "release", "save_demo"]
+    assert "already held" in lines[3]
+    [after_guide] = [r for r in rows["/world/tcp"] if r.get("step") == 2]
+    assert np.allclose(after_guide["Transform3D:translation"][0], grasp[:3, 3], atol=2e-3)
+    assert "/world/demos/demo-00/grasp" in rows and "/world/cloud/first_look" in rows

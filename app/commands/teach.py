@@ -32,6 +32,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     web.add_argument("--host", default="127.0.0.1", help="address the page is served on (default 127.0.0.1: this "
                      "machine only; the page answers only the token in the URL it prints)")
     web.add_argument("--port", type=int, default=8080, help="its port (default 8080)")
+    web.add_argument("--rerun", action="store_true", help="record the session for the Rerun viewer beside the demo "
+                                                           "folder, OUT-session-TIME.rrd (docs/recording.md)")
     web.add_argument("--object", metavar="NAME", help="teach on an imported object (nift objects import) instead of "
                      "procedural ones")
     add_config_argument(p)
@@ -76,6 +78,10 @@ def web(args: argparse.Namespace, t, out: Path) -> int:
         raise ValueError(f"--port must be 1-65535, got {args.port}")
     writable_directory(out, "--out")
     source = load_object(args.object, category=t.category) if args.object else None
+    if args.rerun:
+        from app.recording.target import check_target
+
+        check_target(str(out.parent / f"{out.name}-session.rrd"), "--rerun")  # the folder can be written
 
     from app.simcell.calibration import ensure_calibration
     from app.simcell.cell import SimCell
@@ -87,9 +93,11 @@ def web(args: argparse.Namespace, t, out: Path) -> int:
     with SimCell(cell_config(args)) as cell:
         T_base_cam = ensure_calibration(cell, args.calibration)
         session = TeachSession(cell, t, out, T_base_cam, source, args.seed)
+        recording = _recording(session, out) if args.rerun else None
         page = TeachPage(session, args.host, args.port)
         where = "" if args.host in ("127.0.0.1", "localhost", "::1") else " (reachable from the network; unencrypted: anyone who sees the URL holds the token)"
-        print(f"teach page for {t.name} on {page.url}{where}; demos go to {out}; Ctrl-C stops", flush=True)
+        kept = f"; the session is recorded to {recording.path}" if recording else ""
+        print(f"teach page for {t.name} on {page.url}{where}; demos go to {out}{kept}; Ctrl-C stops", flush=True)
         try:
             while not interrupted.wait(1.0):
                 pass
@@ -98,7 +106,18 @@ def web(args: argparse.Namespace, t, out: Path) -> int:
         finally:
             page.stop()
             session.close()
+            if recording:
+                recording.close()
     return 0
+
+
+def _recording(session, out: Path):
+    """The session's Rerun recording, told of every step (`app.recording.session_log`)."""
+    from app.recording.session_log import SessionRecording, session_path
+
+    recording = SessionRecording(session_path(out))
+    session.observers.append(recording.step)
+    return recording
 
 
 def run(args: argparse.Namespace) -> int:
@@ -112,6 +131,8 @@ def run(args: argparse.Namespace) -> int:
     out = args.out or DEMOS_DIR / t.name
     if args.web or args.object:
         return web(args, t, out)
+    if args.rerun:
+        raise ValueError("--rerun records a session on the teach page: add --web")
     if not args.rebuild:
         # one demo from a poses file joins the others unless --replace says otherwise
         mode = teach_mode(out, args.replace, args.add or (args.poses is not None and not args.replace))

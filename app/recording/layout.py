@@ -44,9 +44,9 @@ def outcome_colour(outcome: str) -> tuple[int, int, int]:
     return GREEN if outcome == "held" or outcome.startswith("planned") else RED
 
 
-def blueprint():
+def blueprint(timeline: str = "sim"):
     """The viewer's layout: the 3-D scene beside the stage log, the camera image, and time plots of the
-    joints, the gripper's width and the tool's force, on the arm's clock."""
+    joints, the gripper's width and the tool's force, on `timeline` (a job: the arm's clock)."""
     import rerun.blueprint as rrb
 
     return rrb.Blueprint(
@@ -62,6 +62,6 @@ def blueprint():
             ),
             column_shares=[3, 2],
         ),
-        rrb.TimePanel(timeline="sim"),
+        rrb.TimePanel(timeline=timeline),
         collapse_panels=True,
     )

@@ -21,6 +21,7 @@ Judges run on copies of the object in a world of their own, so the live cell is 
 """
 from __future__ import annotations
 
+import functools
 import threading
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -51,6 +52,21 @@ LIFT_KEPT = 0.8  # share of the lift the object must follow to count as held
 SETTLE = 1.0  # s the cell runs after a release before the page shows it
 
 Progress = Callable[[float, str], None]
+
+
+def observed(step: Callable) -> Callable:
+    """A step method whose answer (or refusal) is also handed to the session's observers, with its name."""
+    @functools.wraps(step)
+    def told(self: "TeachSession", *args, **kwargs) -> "Step":
+        try:
+            answer = step(self, *args, **kwargs)
+        except ValueError as exc:
+            answer = Step(False, str(exc))
+            self._tell(step.__name__, answer)
+            raise
+        self._tell(step.__name__, answer)
+        return answer
+    return told
 
 
 @dataclass(frozen=True)
@@ -94,10 +110,15 @@ class TeachSession:
         self.current: Taught | None = None
         self.prediction: Prediction | None = None
         self.lock = threading.RLock()
+        self.observers: list[Callable[[TeachSession, str, Step], None]] = []  # told of every step (a recording)
 
     def close(self) -> None:
         self.scene.close()
         self.judges.disconnect()
+
+    def _tell(self, name: str, step: Step) -> None:
+        for observer in self.observers:
+            observer(self, name, step)
 
     # state the page draws ------------------------------------------------------------------------
     def q(self) -> np.ndarray:
@@ -120,6 +141,7 @@ class TeachSession:
         return load_demo(self.out / f"{name}.npz")
 
     # the operator's steps --------------------------------------------------------------------------
+    @observed
     def new_object(self, which: str = "train", instance: int | None = None,
                    placement: tuple[float, float, float] | None = None) -> Step:
         """Clear the cell, put an object down (`which` split, or the imported one) upright at a random
@@ -144,6 +166,7 @@ class TeachSession:
             self.cell.arm.teachMode()
             return Step(True, f"{obj.label} on the table, {len(cloud)} points seen; guide the gripper to a grasp")
 
+    @observed
     def guide(self, T_base_tcp: np.ndarray) -> Step:
         """Move the TCP to T_base_tcp by hand (freedrive), carrying a held object; why not, if it cannot."""
         with self.lock:
@@ -161,6 +184,7 @@ class TeachSession:
                 self.cell.world.set_pose(self.current.obj.body, self.tcp() @ self.current.T_tcp_obj)
             return Step(True, "carrying the object" if held else "following")
 
+    @observed
     def close_gripper(self) -> Step:
         """Close the fingers; held if the gripper detects the object and it follows a LIFT-high lift."""
         with self.lock:
@@ -189,6 +213,7 @@ class TeachSession:
             finally:
                 arm.teachMode()
 
+    @observed
     def release(self) -> Step:
         """Open the fingers where the object is; the place judge's verdict on that pose."""
         with self.lock:
@@ -205,6 +230,7 @@ class TeachSession:
             what = "placed" if verdict.success else "not placed"
             return Step(verdict.success, f"{what}: {verdict.reason}" + ("; save the demo" if verdict.success else ""))
 
+    @observed
     def save_demo(self, progress: Progress = lambda f, s: None) -> Step:
         """Judge the grasp, write the demo and rebuild the templates (staged: whole or not at all)."""
         with self.lock:
@@ -233,6 +259,7 @@ class TeachSession:
             sizes = ", ".join(f"{s} {len(tp.points)} points" for s, tp in templates.items())
             return Step(True, f"saved {demo.name}; templates rebuilt ({sizes})")
 
+    @observed
     def delete_demo(self, name: str, progress: Progress = lambda f, s: None) -> Step:
         """Remove a saved demo and rebuild the templates from the others (staged)."""
         with self.lock:
@@ -246,6 +273,7 @@ class TeachSession:
             progress(1.0, "deleted")
             return Step(True, f"deleted {name}; {left} demos left" + ("" if left else " (no templates)"))
 
+    @observed
     def try_imitation(self, method: str = "nift") -> Step:
         """An unseen (test-split) object put down and the templates imitated on its cloud."""
         with self.lock:
