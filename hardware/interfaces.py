@@ -264,6 +264,12 @@ class Gripper(Device):
     def object_detected(self) -> bool:
         """True when the fingers stopped on something before closing fully."""
 
+    @property
+    @abstractmethod
+    def force(self) -> float:
+        """The force the fingers press with now, newtons (a Robotiq's motor current, as a force): up to
+        the closing force on a held object, about 0 when open or closed on nothing."""
+
 
 class DepthCamera(Device):
     """An RGB-D camera delivering depth registered colour."""

@@ -181,7 +181,7 @@ def test_the_gripper_is_served_as_well(server):
     g = NetGripper(NetDeviceConfig(address=address, keys=keys))
     with g:
         g.open()
-        assert abs(g.width - g.stroke) < 0.005 and not g.object_detected
+        assert abs(g.width - g.stroke) < 0.005 and not g.object_detected and 0.0 <= g.force < 1.0
         with pytest.raises(ValueError, match="force"):
             g.close(force=-1.0)
 

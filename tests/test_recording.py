@@ -54,7 +54,7 @@ def test_the_recording_holds_the_layouts_entities(recorded):
     record, rows = recorded
     expected = {"/world/cloud/first_look", "/world/camera", "/camera/image", "/camera/depth", "/world/prediction/grasp",
                 "/world/nit/grasp", "/world/nit/place", "/world/plan/grasp", "/world/plan/path/carry", "/world/tcp",
-                "/plots/joints/j1", "/plots/joints/j6", "/plots/gripper/width", "/plots/tool/force", "/job/stages",
+                "/plots/joints/j1", "/plots/joints/j6", "/plots/gripper/width", "/plots/gripper/force", "/plots/tool/force", "/job/stages",
                 "/job/verdict", "/robot/joints/elbow_joint", "/world/fixtures/0"}
     assert expected <= set(rows), sorted(expected - set(rows))
     assert any(p.startswith("/robot") and "ur5" in p for p in rows)  # the URDF's meshes

@@ -150,9 +150,14 @@ def test_a_held_object_that_goes_is_no_longer_detected(rig):
 
     world, _, arm, gripper = rig
     T = ur_to_pose(arm.getActualTCPPose())
+    assert gripper.force < 1.0  # open: the motors hold nothing
     box = world.add_box((0.03, 0.03, 0.03), T[:3, 3] + T[:3, :3] @ [0.0, 0.0, 0.01])
     assert gripper.close(force=30.0) and gripper.object_detected
     assert abs(gripper.width - 0.03) < 0.004
+    gripper.close(force=10.0)
+    assert gripper.force == pytest.approx(10.0, abs=0.5)  # squeezing the box at the force asked
+    gripper.close(force=20.0)
+    assert gripper.force == pytest.approx(20.0, abs=0.5)
     world.remove(box)
     world.step(240)
     assert gripper.width < 0.002 and not gripper.object_detected

@@ -68,7 +68,7 @@ class JobContext:
     def _log_end(self, name: str, event: str) -> None:
         if self.log.active:
             self.log.arm_state(self.arm.getActualQ(), self.arm.getActualTCPPose(), self.gripper.width,
-                               self.arm.getActualTCPForce())
+                               self.gripper.force, self.arm.getActualTCPForce())
         self.log.stage(name, event)
 
     @cached_property

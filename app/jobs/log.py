@@ -48,9 +48,9 @@ class JobLog:
     def chosen(self, candidate: Candidate, plan: PickPlacePlan, kin: UR5Kinematics) -> None:
         """The pair the job will execute, its planned segments, and the arm's kinematics (its TCP)."""
 
-    def arm_state(self, q: np.ndarray, tcp: np.ndarray, width: float, tool_force: np.ndarray) -> None:
-        """The arm's joints (6,), TCP pose (UR [x y z rx ry rz]), the gripper's width (m) and the force on
-        the tool (6,), now."""
+    def arm_state(self, q: np.ndarray, tcp: np.ndarray, width: float, grip: float, tool_force: np.ndarray) -> None:
+        """The arm's joints (6,), TCP pose (UR [x y z rx ry rz]), the gripper's width (m) and force (N),
+        and the force on the tool (6,), now."""
 
     def end(self, result: JobResult) -> None:
         """The job's record, once it has ended (failed or not)."""

@@ -41,7 +41,7 @@ class RerunJobLog(JobLog):
         self.rec.send_blueprint(L.blueprint())
         self.clock: Callable[[], float] = lambda: 0.0
         self.t0 = time.perf_counter()
-        self.samples: list[tuple[float, float, np.ndarray, np.ndarray, float, np.ndarray]] = []
+        self.samples: list[tuple[float, float, np.ndarray, np.ndarray, float, float, np.ndarray]] = []
         self.events: list[tuple[float, str, str]] = []  # (sim time, stage, event)
         self.templates: dict[str, np.ndarray] = {}
         self._framed: set[str] = set()
@@ -93,9 +93,9 @@ class RerunJobLog(JobLog):
             self._world(f"{L.PLAN}/path/{segment.label.replace(' ', '_')}", rr.LineStrips3D([tcp], colors=L.BLUE))
         self._log_nit(candidate)
 
-    def arm_state(self, q: np.ndarray, tcp: np.ndarray, width: float, tool_force: np.ndarray) -> None:
+    def arm_state(self, q: np.ndarray, tcp: np.ndarray, width: float, grip: float, tool_force: np.ndarray) -> None:
         self.samples.append((self.clock(), time.perf_counter() - self.t0, np.asarray(q, float).copy(),
-                             np.asarray(tcp, float).copy(), float(width), np.asarray(tool_force, float).copy()))
+                             np.asarray(tcp, float).copy(), float(width), float(grip), np.asarray(tool_force, float).copy()))
 
     def end(self, result) -> None:
         self._now()
@@ -139,12 +139,13 @@ class RerunJobLog(JobLog):
     def _send_samples(self) -> None:
         if not self.samples:
             return
-        sim, wall, q, tcp, width, force = (np.array(v) for v in zip(*self.samples))
+        sim, wall, q, tcp, width, grip, force = (np.array(v) for v in zip(*self.samples))
         times = [rr.TimeColumn("sim", duration=sim), rr.TimeColumn("wall", duration=wall)]
         self.robot.send_joints(self.rec, times, q)
         for j in range(6):
             self.rec.send_columns(f"{L.JOINTS}/j{j + 1}", indexes=times, columns=rr.Scalars.columns(scalars=q[:, j]))
         self.rec.send_columns(L.GRIPPER_WIDTH, indexes=times, columns=rr.Scalars.columns(scalars=width))
+        self.rec.send_columns(L.GRIPPER_FORCE, indexes=times, columns=rr.Scalars.columns(scalars=grip))
         self.rec.send_columns(L.TOOL_FORCE, indexes=times,
                               columns=rr.Scalars.columns(scalars=np.linalg.norm(force[:, :3], axis=1)))
         poses = [ur_to_pose(p) for p in tcp]

@@ -20,6 +20,7 @@ TCP = "world/tcp"  # the TCP as the arm reported it
 ROBOT = "robot"  # the URDF's meshes; /joints/<joint>: the joints' transforms
 JOINTS = "plots/joints"  # /j1 ... /j6: joint angles (rad)
 GRIPPER_WIDTH = "plots/gripper/width"  # m
+GRIPPER_FORCE = "plots/gripper/force"  # N the fingers press with
 TOOL_FORCE = "plots/tool/force"  # N: |F| on the tool
 STAGES = "job/stages"  # a text log: each stage's start and end
 VERDICT = "job/verdict"  # the outcome, and the record as JSON
@@ -57,7 +58,7 @@ def blueprint(timeline: str = "sim"):
                 rrb.Spatial2DView(name="camera", origin=f"{IMAGES}/image"),
                 rrb.TimeSeriesView(name="joints (rad)", origin=JOINTS),
                 rrb.TimeSeriesView(name="gripper width (m)", origin=GRIPPER_WIDTH),
-                rrb.TimeSeriesView(name="tool force (N)", origin=TOOL_FORCE),
+                rrb.TimeSeriesView(name="forces (N): tool, grip", contents=[TOOL_FORCE, GRIPPER_FORCE]),
                 row_shares=[2, 2, 1, 1, 1],
             ),
             column_shares=[3, 2],

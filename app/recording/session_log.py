@@ -41,6 +41,7 @@ class SessionRecording:
         for j, value in enumerate(q):
             self.rec.log(f"{L.JOINTS}/j{j + 1}", rr.Scalars(float(value)))
         self.rec.log(L.GRIPPER_WIDTH, rr.Scalars(float(session.cell.gripper.width)))
+        self.rec.log(L.GRIPPER_FORCE, rr.Scalars(float(session.cell.gripper.force)))
         T = ur_to_pose(arm.getActualTCPPose())
         self._world(L.TCP, rr.Transform3D(translation=T[:3, 3], mat3x3=T[:3, :3]))
         taught = session.current

@@ -27,7 +27,8 @@ def sampled(cell: SimCell, job_log: JobLog, every: float = EVERY) -> Iterator[No
         steps[0] += 1
         if steps[0] % n == 0:
             arm = cell.arm
-            job_log.arm_state(arm.getActualQ(), arm.getActualTCPPose(), cell.gripper.width, arm.getActualTCPForce())
+            job_log.arm_state(arm.getActualQ(), arm.getActualTCPPose(), cell.gripper.width, cell.gripper.force,
+                              arm.getActualTCPForce())
 
     world.on_step.append(sample)
     try:

@@ -25,7 +25,7 @@ class FakeGripper(NoLink, Gripper):
     def __init__(self, arm: FakeArm, config: FakeGripperConfig = FakeGripperConfig()) -> None:
         super().__init__(config)
         self.arm = arm
-        self._width, self._detected = config.stroke, False
+        self._width, self._detected, self._force = config.stroke, False, 0.0
         self.jams: list[float] = []  # scripted: each opening while holding stops at the next of these widths (m)
         self.fallen: np.ndarray | None = None  # where a dropped object comes to rest (T_base_obj); None: below the TCP
 
@@ -45,10 +45,16 @@ class FakeGripper(NoLink, Gripper):
     def object_detected(self) -> bool:
         return self._detected
 
+    @property
+    def force(self) -> float:
+        """The closing force while it holds something, else 0 (no motor to read)."""
+        return self._force if self._detected else 0.0
+
     def close(self, force: float = 40.0, speed: float = 0.05) -> bool:
         self.require_connected()
         T_tcp = self.arm.kinematics.fk(self.arm.getActualQ())
         held = self.arm.world.between_fingers(T_tcp)
+        self._force = float(force)
         if held is None:
             self._width, self._detected = 0.0, False
             return False

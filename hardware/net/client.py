@@ -312,6 +312,10 @@ class NetGripper(_NetDevice, Gripper):
     def object_detected(self) -> bool:
         return bool(self._call("object_detected"))
 
+    @property
+    def force(self) -> float:
+        return float(self._call("force"))
+
 
 class NetCamera(_NetDevice, DepthCamera):
     """An RGB-D camera served by `nift serve`."""

@@ -100,6 +100,7 @@ def gripper_verbs(gripper: Gripper) -> dict[str, Verb]:
         "max_force": Verb(lambda g, _: g.max_force),
         "width": Verb(lambda g, _: g.width),
         "object_detected": Verb(lambda g, _: g.object_detected),
+        "force": Verb(lambda g, _: g.force),
         "open": Verb(lambda g, x: g.open(checks.number(arg(x, 0, 0.1), "speed", 0.0, checks.MAX_SPEED),
                                          checks.optional_number(arg(x, 1), "width", 0.0, g.stroke)), "motion", 2),
         "close": Verb(lambda g, x: g.close(checks.number(arg(x, 0, 40.0), "force", 0.0, g.max_force),

@@ -60,6 +60,13 @@ class SimGripper(Gripper):
         self.require_connected()
         return self._detected and self.width > CLOSED_TOLERANCE
 
+    @property
+    def force(self) -> float:
+        """The fingers' motors' applied force (N), the mean of the two."""
+        self.require_connected()
+        states = p.getJointStates(self.robot.body, self.robot.finger_joints, physicsClientId=self.robot.client)
+        return float(np.mean([abs(s[3]) for s in states]))
+
     def open(self, speed: float = 0.1, width: float | None = None) -> None:
         self.require_connected()
         if width is not None and not 0.0 < width <= self.stroke:
