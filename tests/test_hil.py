@@ -230,3 +230,45 @@ def test_the_whole_job_over_the_network_matches_the_in_process_cell(tmp_path):
         assert np.allclose(net.poses[stage], local.poses[stage], atol=1e-4), (
             stage, net.attempts, local.attempts, net.candidates[:3], local.candidates[:3], net.look, local.look)
     assert net.info["instance"] == local.info["instance"]
+
+
+def test_a_terminated_server_stops_its_moving_arm_and_exits_within_a_second(tmp_path):
+    """SIGTERM while the arm runs a slow realtime moveJ: the server stops the arm (logged), closes, and
+    the process has ended within 1 s; its client's motion ends without arriving."""
+    import signal
+    import threading
+
+    with served_cell(tmp_path / "keys", "--realtime", "--no-advertise") as (address, proc):
+        arm = NetArm(NetDeviceConfig(address=address, keys=tmp_path / "keys"))
+        arm.connect()
+        outcome = {}
+
+        def move() -> None:
+            try:
+                outcome["arrived"] = arm.moveJ(np.asarray(HOME_Q) + [1.0, 0, 0, 0, 0, 0], 0.3, 1.0)
+            except Exception as exc:  # noqa: BLE001 - the server goes away: any failure is an outcome
+                outcome["error"] = type(exc).__name__
+
+        mover = threading.Thread(target=move, daemon=True)
+        mover.start()
+        time.sleep(1.0)
+        start = time.monotonic()
+        proc.send_signal(signal.SIGTERM)
+        proc.wait(10)
+        took = time.monotonic() - start
+        mover.join(5)
+        arm.disconnect()
+    assert took < 1.0 and proc.returncode == 0, took
+    assert outcome.get("arrived") is not True
+    assert any("server shutting down" in line for line in proc.log)
+
+
+def test_a_killed_server_leaves_no_process_behind(tmp_path):
+    """kill -9 of `nift serve`: within 2 s neither it nor any process it started is alive."""
+    import psutil
+
+    with served_cell(tmp_path / "keys", "--no-advertise") as (address, proc):
+        family = [psutil.Process(proc.pid), *psutil.Process(proc.pid).children(recursive=True)]
+        proc.kill()
+        _, alive = psutil.wait_procs(family, timeout=2.0)
+    assert alive == [] and not _port_open(address)

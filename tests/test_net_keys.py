@@ -143,3 +143,32 @@ def test_a_captured_session_is_encrypted_and_replayed_it_moves_nothing(served):
         assert np.allclose(still.call("getActualQ"), target - 0.4)  # and the server serves on
     finally:
         still.close()
+
+
+def test_connections_that_never_authenticate_are_dropped_and_a_client_is_served_meanwhile(served):
+    """200 TCP connections held open without a handshake (a stranger exhausting the server's sockets):
+    a client with a key is answered while they are open, and after the handshake interval the server
+    has closed them (its process holds about as many descriptors as before)."""
+    import os
+
+    from hardware.net.server import HANDSHAKE_MS
+
+    server, arm, keys = served
+    before = len(os.listdir("/proc/self/fd"))
+    idle = [socket.create_connection(("127.0.0.1", server.port)) for _ in range(200)]
+    client = NetClient(f"tcp://127.0.0.1:{server.port}", client_keys(keys), "arm", timeout=2.0)
+    try:
+        start = time.monotonic()
+        assert client.call("getActualQ").shape == (6,)
+        assert time.monotonic() - start < 0.5
+        time.sleep(HANDSHAKE_MS / 1000 + 1.0)
+        for s in idle:
+            s.settimeout(1.0)
+            while s.recv(4096):  # the server's greeting, then the end: closed by the server (a timeout fails)
+                pass
+    finally:
+        for s in idle:
+            s.close()
+        client.close()
+    time.sleep(0.2)
+    assert len(os.listdir("/proc/self/fd")) <= before + 10

@@ -39,6 +39,8 @@ LOG = logging.getLogger("nift.net")
 BUILTIN = ("hello", "result", "release", "setWatchdog", "kickWatchdog")
 DRAIN = 64  # requests answered in a row before the watchdog looks again
 KEPT_RESULTS = 256  # finished jobs remembered for their "result" poll
+HANDSHAKE_MS = 2000  # a TCP connection that has not completed the CURVE handshake by then is dropped
+QUEUED_REPLIES = 64  # replies kept per client that does not read them (ZeroMQ's high-water mark)
 MAX_WAIT = 0.02  # s a "result" poll may wait for its job: it answers the moment the job ends, and other
 # requests (stopJ, state reads) wait at most this long behind it
 
@@ -134,6 +136,8 @@ class DeviceServer:
         as_server(s, self.config.keys)
         s.setsockopt(zmq.LINGER, 0)
         s.setsockopt(zmq.MAXMSGSIZE, 4 * wire.MAX_MESSAGE)  # far larger: the peer is cut off, never buffered
+        s.setsockopt(zmq.HANDSHAKE_IVL, HANDSHAKE_MS)  # a connection that has not authenticated by then is closed
+        s.setsockopt(zmq.SNDHWM, QUEUED_REPLIES)  # replies a client leaves unread: the rest are dropped, not kept
         try:
             if self.config.port:
                 s.bind(f"tcp://{self.config.bind}:{self.config.port}")
@@ -163,6 +167,7 @@ class DeviceServer:
         if self._auth is not None:
             self._auth.stop()
             self._auth = None
+        self._context.term()  # its own: nothing else uses it
 
     def serve_forever(self, poll_ms: int = 10) -> None:
         """Answer requests until `stop()`; check the watchdog between them."""
