@@ -59,5 +59,6 @@ class MeteredArm:
             return move()
         finally:
             q1 = self.arm.getActualQ()
-            self.seconds += self.arm.getTimestamp() - t0
+            self.seconds += round(self.arm.getTimestamp() - t0, 6)  # rounded: the same motion, started later on
+            # the controller's clock, differs in the last bits of the difference of two larger times
             self.travel += float(np.abs(q1 - q0).sum()) if path is None else path_travel(path, q1)

@@ -6,6 +6,9 @@ cookie, and no websocket from a page of another origin.
   (viser's client drops the URL's query when it connects).
 - A websocket whose Origin is not the page's own (`http://` + the request's Host) gets 403 before
   viser reads a message: another site open in the operator's browser cannot press a button.
+- What a client may change is what an operator can: a widget's value, on a widget that is not
+  disabled, text at most `MAX_TEXT` characters (`filter_client_updates`). viser applies any property a
+  client sends (a tab could disable "Save demo" for every tab); the rest is dropped.
 
 viser 1.1.1 serves its page and websocket through one `websockets.asyncio.server.serve(...,
 process_request=...)` call and has no hook for either check; `gated_server` wraps that call's
@@ -23,6 +26,7 @@ from typing import Any, Callable, Iterator
 from urllib.parse import parse_qs, urlsplit
 
 COOKIE = "nift_teach_token"
+MAX_TEXT = 200  # characters a text field takes from a client
 _patching = threading.Lock()  # one gated start at a time: the wrapped call is a module attribute
 
 
@@ -87,8 +91,41 @@ def _gated_serve(token: str) -> Iterator[None]:
 
 
 def gated_server(token: str, **viser_kwargs: Any):
-    """A `viser.ViserServer` that answers only requests carrying `token` and websockets of its own origin."""
+    """A `viser.ViserServer` that answers only requests carrying `token` and websockets of its own origin,
+    and takes from its clients only what an operator can change (`filter_client_updates`)."""
     import viser
 
+    filter_client_updates()
     with _gated_serve(token):
         return viser.ViserServer(**viser_kwargs)  # returns once its server is listening (gated)
+
+
+def operator_updates(updates: dict, disabled: bool) -> dict:
+    """Of a client's widget updates, what an operator could have made: the value alone, none on a disabled
+    widget, text cut to MAX_TEXT characters."""
+    if disabled or "value" not in updates:
+        return {}
+    value = updates["value"]
+    return {"value": value[:MAX_TEXT] if isinstance(value, str) else value}
+
+
+def filter_client_updates() -> None:
+    """Put `operator_updates` in front of viser's handling of a client's widget updates (once per process:
+    viser registers its handler when a server is made and has no hook for this)."""
+    from viser import _gui_api, _messages
+
+    api = _gui_api.GuiApi
+    if getattr(api, "_nift_filtered", False):
+        return
+    handle_updates = api._handle_gui_updates
+
+    async def filtered(self, client_id, message: _messages.GuiUpdateMessage) -> None:
+        handle = self._gui_input_handle_from_uuid.get(message.uuid, None)
+        if handle is None:
+            return
+        updates = operator_updates(message.updates, bool(getattr(handle._impl.props, "disabled", False)))
+        if updates:
+            await handle_updates(self, client_id, _messages.GuiUpdateMessage(message.uuid, updates))
+
+    api._handle_gui_updates = filtered
+    api._nift_filtered = True
