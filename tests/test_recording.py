@@ -169,3 +169,17 @@ def test_a_teach_in_session_is_recorded_step_by_step(tmp_path):
     [after_guide] = [r for r in rows["/world/tcp"] if r.get("step") == 2]
     assert np.allclose(after_guide["Transform3D:translation"][0], grasp[:3, 3], atol=2e-3)
     assert "/world/demos/demo-00/grasp" in rows and "/world/cloud/first_look" in rows
+
+
+def test_without_a_viewer_to_spawn_the_recording_fails_in_one_line(monkeypatch):
+    import rerun as rr
+
+    from app.recording.job_log import RerunJobLog
+
+    def no_viewer(**_):
+        raise RuntimeError("Failed to find Rerun Viewer executable in PATH.\n\n    You can install ...")
+
+    monkeypatch.setattr(rr, "spawn", no_viewer)
+    with pytest.raises(FileNotFoundError, match="no Rerun viewer could be started") as err:
+        RerunJobLog(None)
+    assert "\n" not in str(err.value) and "Failed to find Rerun Viewer" in str(err.value)

@@ -11,6 +11,7 @@ recorded job costs little more than an unrecorded one.
 from __future__ import annotations
 
 import json
+import sys
 import time
 import uuid
 from pathlib import Path
@@ -35,7 +36,7 @@ class RerunJobLog(JobLog):
         self.path = path
         self.rec = rr.RecordingStream("nift-cell", recording_id=f"{name}-{uuid.uuid4().hex[:8]}")
         if path is None:
-            self.rec.spawn()
+            spawn_viewer(self.rec)
         else:
             self.rec.save(path)
         self.rec.send_blueprint(L.blueprint())
@@ -152,6 +153,17 @@ class RerunJobLog(JobLog):
         self.rec.log(L.TCP, rr.CoordinateFrame("base"), static=True)
         self.rec.send_columns(L.TCP, indexes=times, columns=rr.Transform3D.columns(
             translation=[T[:3, 3] for T in poses], mat3x3=[T[:3, :3] for T in poses]))
+
+
+def spawn_viewer(rec: rr.RecordingStream) -> None:
+    """Stream `rec` to a Rerun viewer started now: the `rerun` installed beside this Python (the venv's
+    bin, which need not be on PATH), else the one on PATH; a one-line error when there is none."""
+    beside = Path(sys.executable).parent / "rerun"
+    try:
+        rr.spawn(executable_path=str(beside) if beside.exists() else None, recording=rec)
+    except RuntimeError as exc:
+        raise FileNotFoundError(f"--rerun: no Rerun viewer could be started ({str(exc).strip().splitlines()[0]}); "
+                                "give a file instead, --rerun job.rrd") from None
 
 
 def _template_points(t, method: str) -> dict[str, np.ndarray]:
