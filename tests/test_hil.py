@@ -151,6 +151,39 @@ def test_the_watchdog_stops_the_arm_when_its_client_falls_silent(server, arm):
         arm.connect()
 
 
+def test_the_watchdog_stops_the_arm_within_0_6_s_while_another_client_floods_the_server(server, arm):
+    """The commander falls silent mid-motion (watchdog 0.3 s) while a second client sends state reads
+    as fast as it can: the arm is at rest within 0.6 s of the commander's last message, read off the
+    flood's own replies."""
+    address, keys, _ = server
+    silent = NetClient(address, client_keys(keys), "arm")
+    flooder = NetClient(address, client_keys(keys), "arm")
+    arm.disconnect()
+    seen: list[tuple[float, float]] = []  # (time, fastest joint speed)
+    stop = threading.Event()
+
+    def flood() -> None:
+        while not stop.is_set():
+            seen.append((time.monotonic(), float(np.abs(flooder.call("getActualQd")).max())))
+
+    try:
+        silent.call("moveJ", FAR, 1.0, 2.0)
+        last = time.monotonic()  # the commander's last message
+        reader = threading.Thread(target=flood, daemon=True)
+        reader.start()
+        time.sleep(1.5)
+        stop.set()
+        reader.join(5)
+        assert len(seen) > 200  # a flood indeed (one read every few ms)
+        moving = [t for t, speed in seen if speed > 0.05]
+        assert moving and moving[-1] - last < 0.6, moving[-1] - last if moving else None
+    finally:
+        silent.call("release")
+        silent.close()
+        flooder.close()
+        arm.connect()
+
+
 def test_a_protective_stop_reaches_the_client_as_the_same_error(arm):
     into_table = np.array(HOME_Q) + [0.0, 1.3, 0.0, 0.0, 0.0, 0.0]
     assert arm.moveJ(into_table, speed=1.0, acceleration=4.0) is False
