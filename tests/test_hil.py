@@ -305,3 +305,41 @@ def test_a_killed_server_leaves_no_process_behind(tmp_path):
         proc.kill()
         _, alive = psutil.wait_procs(family, timeout=2.0)
     assert alive == [] and not _port_open(address)
+
+
+def test_another_clients_captures_do_not_slow_the_commanders_motion(server, arm):
+    """A realtime moveJ timed alone, then again while a second client asks for captures as fast as it
+    can: those are refused Busy (the served devices share one motion thread) and the motion takes at
+    most 10 % longer."""
+    address, keys, _ = server
+    target = np.array(HOME_Q) + [0.5, 0, 0, 0, 0, 0]
+
+    def timed_move(q) -> float:
+        start = time.monotonic()
+        assert arm.moveJ(q, speed=1.0, acceleration=4.0)
+        return time.monotonic() - start
+
+    alone = timed_move(target)
+    timed_move(np.array(HOME_Q))
+    camera = NetClient(address, client_keys(keys), "camera")
+    refused, stop = [], threading.Event()
+
+    def flood() -> None:
+        while not stop.is_set():
+            try:
+                camera.call("capture")
+            except DeviceRefusedError as exc:
+                refused.append(str(exc))
+
+    reader = threading.Thread(target=flood, daemon=True)
+    reader.start()
+    try:
+        time.sleep(0.05)
+        crowded = timed_move(target)
+    finally:
+        stop.set()
+        reader.join(5)
+        camera.call_quietly("release")
+        camera.close()
+    assert refused and "another client commands" in refused[0]
+    assert crowded <= 1.10 * alone, (alone, crowded)

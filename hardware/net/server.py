@@ -6,10 +6,13 @@ connection is encrypted with its own session keys (a captured session replayed i
 Every request is then checked for its shape (`hardware.net.request`: no field is used before) and
 before it reaches a device (`hardware.net.checks`, in the verb tables of `hardware.net.verbs`); a
 malformed or oversized message gets an error reply and the server keeps serving. A client is its
-key and the session it names, so no key can speak for another's session. One client commands a device at a time: the first to send it a command holds it until it
-says "release" or stays silent for `lease` seconds with nothing running; another client may read
-its state, and stop it, but not command it. Motions run on one motion thread (the simulated
-devices share one physics world), so the socket keeps answering while they run: state reads,
+key and the session it names, so no key can speak for another's session.
+
+One client commands a device at a time: the first to send it a command holds it until it says
+"release" or stays silent for `lease` seconds with nothing running; another client may read its
+state, and stop it, but not command it. Motions run on one motion thread (the simulated
+devices share one physics world), and while a client commands an arm, another client's motion or
+capture is refused Busy rather than queued behind its motions; the socket keeps answering: state reads,
 "result" polls and stopJ. A watchdog (ur_rtde's setWatchdog/kickWatchdog) stops a running arm
 motion when its client has sent nothing for 1 / min_frequency seconds; any message is a kick, and
 a waiting client's "result" polls keep it fed (each waits up to MAX_WAIT for its job, so the reply
@@ -234,8 +237,22 @@ class DeviceServer:
             for name in (device, *self._moved(device)):
                 self._claim(client, name)
         if spec.kind in ("motion", "work"):
+            self._check_motion_thread(client, device, verb)
             return {"job": self._submit(client, device, lambda: spec.call(svc.device, args))}
         return self._call(lambda: spec.call(svc.device, args))
+
+    def _check_motion_thread(self, client: str, device: str, verb: str) -> None:
+        """Busy while another client commands an arm (or a rig that moves one), its lease live: the served
+        devices share one motion thread (one physics world), and a capture queued there (~0.1 s each)
+        would stretch that client's motions. A camera's or gripper's commander blocks no one."""
+        now = time.monotonic()
+        for name, held in self._control.items():
+            svc = self.services[name]
+            if held.client == client or not (svc.watchdog or svc.moves):
+                continue
+            if self._running(name) or now - self._seen.get(held.client, 0.0) < self.config.lease:
+                raise Refused("Busy", f"{device} {verb[:40]}: another client commands {name} "
+                                      f"(read state, or last_frame, meanwhile)")
 
     def _resolve(self, device: Any) -> Any:
         """A device's name, or its kind when exactly one device of that kind is served."""
