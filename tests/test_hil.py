@@ -343,3 +343,31 @@ def test_another_clients_captures_do_not_slow_the_commanders_motion(server, arm)
         camera.close()
     assert refused and "another client commands" in refused[0]
     assert crowded <= 1.10 * alone, (alone, crowded)
+
+
+def _poll_until_gone(client: NetClient) -> None:
+    """Poll the client's first job until the server answers no more (as `NetClient.run` does)."""
+    try:
+        while not client.call("result", 1, 0.02, deadline=2.0)["done"]:
+            pass
+    except Exception:  # noqa: BLE001 - the server went away: the end of the polling
+        pass
+
+
+def test_a_terminated_server_does_not_wait_for_a_rig_job(tmp_path):
+    """SIGTERM while the rig calibrates the camera (20 views, realtime: many seconds): the arm is stopped
+    and the process has ended within 1 s."""
+    import signal
+
+    with served_cell(tmp_path / "keys", "--realtime", "--no-advertise") as (address, proc):
+        rig = NetClient(address, client_keys(tmp_path / "keys"), "sim")
+        caller = threading.Thread(target=lambda: rig.call_quietly("calibrate") or _poll_until_gone(rig), daemon=True)
+        caller.start()  # submitted, then polled (the polls feed the watchdog)
+        time.sleep(1.5)
+        start = time.monotonic()
+        proc.send_signal(signal.SIGTERM)
+        proc.wait(10)
+        took = time.monotonic() - start
+        rig.close()
+    assert took < 1.0 and proc.returncode == 0, took
+    assert any("server shutting down" in line for line in proc.log), proc.log[-5:]

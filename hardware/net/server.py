@@ -42,6 +42,7 @@ LOG = logging.getLogger("nift.net")
 BUILTIN = ("hello", "result", "release", "setWatchdog", "kickWatchdog")
 DRAIN = 64  # requests answered in a row before the watchdog looks again
 KEPT_RESULTS = 256  # finished jobs remembered for their "result" poll
+CLOSE_WAIT = 0.3  # s a closing server waits for its running jobs after stopping their devices
 HANDSHAKE_MS = 2000  # a TCP connection that has not completed the CURVE handshake by then is dropped
 QUEUED_REPLIES = 64  # replies kept per client that does not read them (ZeroMQ's high-water mark)
 MAX_WAIT = 0.02  # s a "result" poll may wait for its job: it answers the moment the job ends, and other
@@ -159,11 +160,15 @@ class DeviceServer:
         self._stop.set()
 
     def close(self) -> None:
-        """Stop every device that moves, close the socket, end the motion thread."""
+        """Stop every device that moves, close the socket, end the motion thread: a job still running
+        CLOSE_WAIT s after its devices were stopped (a rig's calibration goes on to its next view) is
+        left to the process's end, so a stopped server never waits on it."""
         for name, svc in self.services.items():
             if "stopJ" in svc.verbs and self._running(name):
                 self._safe_stop(name, "server shutting down")
-        self._worker.shutdown(wait=True, cancel_futures=True)
+        running = [j.future for j in self._jobs.values() if not j.future.done()]
+        self._worker.shutdown(wait=False, cancel_futures=True)
+        futures.wait(running, timeout=CLOSE_WAIT)
         if self._socket is not None:
             self._socket.close(0)
             self._socket = None
