@@ -4,6 +4,7 @@ the input, and the working directory left exactly as it was (no file written, no
 file, no empty folder). One case also runs as the installed `nift` script, the way a user starts it."""
 import json
 import os
+import signal
 import subprocess
 import sys
 from pathlib import Path
@@ -32,9 +33,15 @@ def run_forked(cases: list, root: Path, env: dict) -> list[subprocess.CompletedP
             for i, (args, _, cwd, _) in enumerate(cases)]
     (root / "cases.json").write_text(json.dumps(jobs))
     server = Path(__file__).with_name("cli_forkserver.py")
-    done = subprocess.run([sys.executable, str(server), str(root / "cases.json"), str(root / "codes.json")],
-                          capture_output=True, text=True, timeout=900, env=env)
-    assert done.returncode == 0, done.stderr[-2000:]
+    proc = subprocess.Popen([sys.executable, str(server), str(root / "cases.json"), str(root / "codes.json")],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env, start_new_session=True)
+    try:
+        _, stderr = proc.communicate(timeout=900)
+    except subprocess.TimeoutExpired:  # a case that does not end (a server that serves): none of it is left running
+        os.killpg(proc.pid, signal.SIGKILL)
+        proc.communicate()
+        raise
+    assert proc.returncode == 0, stderr[-2000:]
     codes = json.loads((root / "codes.json").read_text())
     return [subprocess.CompletedProcess(j["args"], code, Path(j["stdout"]).read_text(), Path(j["stderr"]).read_text())
             for j, code in zip(jobs, codes)]

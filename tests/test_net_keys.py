@@ -113,10 +113,13 @@ class Tap:
 
     @staticmethod
     def _pump(source: socket.socket, sink: socket.socket, record: bytearray | None) -> None:
-        while data := source.recv(65536):
-            if record is not None:
-                record.extend(data)
-            sink.sendall(data)
+        try:
+            while data := source.recv(65536):
+                if record is not None:
+                    record.extend(data)
+                sink.sendall(data)
+        except OSError:  # the other side closed first: the relay ends
+            pass
         sink.close()
 
 

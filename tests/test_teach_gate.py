@@ -103,15 +103,27 @@ def test_in_chromium_a_page_of_another_origin_cannot_open_the_teach_pages_websoc
         other.shutdown()
 
 
-def test_a_client_changes_only_what_an_operator_can(tmp_path):
-    """Over the page's own websocket (token, own origin): an update that replaces the Save button's
-    callbacks is dropped, so a click still saves; a click on a disabled button does nothing; a pasted
-    10,000-character text is cut to MAX_TEXT. viser alone applied every one of them."""
+SEND = """
+const done = arguments[arguments.length - 1];
+const messages = arguments[2];
+const ws = new WebSocket(arguments[0], [arguments[1]]);
+ws.onopen = () => { for (const m of messages) ws.send(new Uint8Array(m)); setTimeout(() => { ws.close(); done("sent"); }, 500); };
+ws.onerror = () => done("refused");
+setTimeout(() => done("timeout"), 10000);
+"""
+
+
+def test_in_chromium_a_tab_changes_only_what_an_operator_can():
+    """A tab of the operator's browser (Chromium, the page opened with its token) sends, over the page's
+    own websocket, an update that drops the Save button's callbacks, a click, and a 10,000-character
+    text: the callbacks stay (the click saves), the text is cut to MAX_TEXT; a click on a disabled
+    button does nothing. viser alone applied every one of them."""
     import time
 
     import msgspec
 
     from app.teach.gate import MAX_TEXT
+    from app.teach.operator import chromium
 
     port = free_port()
     server = gated_server("s3cret-token", host="127.0.0.1", port=port, verbose=False)
@@ -120,26 +132,28 @@ def test_a_client_changes_only_what_an_operator_can(tmp_path):
     save.on_click(lambda _: saved.append(1))
     name = server.gui.add_text("Name", "mug")
 
-    def update(ws, handle, **updates) -> None:
-        ws.send(msgspec.msgpack.encode({"type": "GuiUpdateMessage", "uuid": handle._impl.uuid, "updates": updates}))
+    def update(handle, **updates) -> list[int]:
+        return list(msgspec.msgpack.encode({"type": "GuiUpdateMessage", "uuid": handle._impl.uuid, "updates": updates}))
 
+    camera = list(msgspec.msgpack.encode({  # a browser's first message: viser counts the client connected then
+        "type": "ViewerCameraMessage", "wxyz": [1.0, 0.0, 0.0, 0.0], "position": [1.0, 1.0, 1.0], "fov": 1.0,
+        "near": 0.01, "far": 100.0, "image_height": 600, "image_width": 800, "look_at": [0.0, 0.0, 0.0],
+        "up_direction": [0.0, 0.0, 1.0]}))
+    driver = chromium()
     try:
-        with connect(f"ws://127.0.0.1:{port}", origin=f"http://127.0.0.1:{port}", subprotocols=[PROTOCOL],
-                     additional_headers={"Cookie": f"{COOKIE}=s3cret-token"}, open_timeout=10) as ws:
-            ws.send(msgspec.msgpack.encode({  # a browser's first message: viser counts the client connected then
-                "type": "ViewerCameraMessage", "wxyz": [1.0, 0.0, 0.0, 0.0], "position": [1.0, 1.0, 1.0], "fov": 1.0,
-                "near": 0.01, "far": 100.0, "image_height": 600, "image_width": 800, "look_at": [0.0, 0.0, 0.0],
-                "up_direction": [0.0, 0.0, 1.0]}))
-            update(ws, save, update_cb=[], removed=True)  # another tab's write: no Save for anyone
-            update(ws, save, value=True)
-            update(ws, name, value="x" * 10_000)
-            deadline = time.monotonic() + 5
-            while (not saved or name.value == "mug") and time.monotonic() < deadline:
-                time.sleep(0.05)
-            assert saved == [1] and name.value == "x" * MAX_TEXT
-            save.disabled = True
-            update(ws, save, value=True)
-            time.sleep(0.5)
-            assert saved == [1]
+        driver.set_script_timeout(20)
+        driver.get(f"http://127.0.0.1:{port}/?token=s3cret-token")
+        sent = driver.execute_async_script(SEND, f"ws://127.0.0.1:{port}", PROTOCOL, [
+            camera, update(save, update_cb=[], removed=True), update(save, value=True), update(name, value="x" * 10_000)])
+        assert sent == "sent"
+        deadline = time.monotonic() + 5
+        while (not saved or name.value == "mug") and time.monotonic() < deadline:
+            time.sleep(0.05)
+        assert saved == [1] and name.value == "x" * MAX_TEXT
+        save.disabled = True
+        assert driver.execute_async_script(SEND, f"ws://127.0.0.1:{port}", PROTOCOL, [camera, update(save, value=True)]) == "sent"
+        time.sleep(0.5)
+        assert saved == [1]
     finally:
+        driver.quit()
         server.stop()
