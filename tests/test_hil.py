@@ -308,9 +308,9 @@ def test_a_killed_server_leaves_no_process_behind(tmp_path):
 
 
 def test_another_clients_captures_do_not_slow_the_commanders_motion(server, arm):
-    """A realtime moveJ timed alone, then again while a second client asks for captures as fast as it
-    can: those are refused Busy (the served devices share one motion thread) and the motion takes at
-    most 10 % longer."""
+    """A realtime moveJ timed alone, then again while a second client asks for captures and reads the
+    arm's state as fast as it can: the captures are refused Busy (the served devices share one motion
+    thread), the reads answered, and the motion takes at most 10 % longer."""
     address, keys, _ = server
     target = np.array(HOME_Q) + [0.5, 0, 0, 0, 0, 0]
 
@@ -324,12 +324,16 @@ def test_another_clients_captures_do_not_slow_the_commanders_motion(server, arm)
     camera = NetClient(address, client_keys(keys), "camera")
     refused, stop = [], threading.Event()
 
+    watcher = NetClient(address, client_keys(keys), "arm")
+    reads = []
+
     def flood() -> None:
         while not stop.is_set():
             try:
                 camera.call("capture")
             except DeviceRefusedError as exc:
                 refused.append(str(exc))
+            reads.append(watcher.call("getActualQ"))
 
     reader = threading.Thread(target=flood, daemon=True)
     reader.start()
@@ -341,7 +345,8 @@ def test_another_clients_captures_do_not_slow_the_commanders_motion(server, arm)
         reader.join(5)
         camera.call_quietly("release")
         camera.close()
-    assert refused and "another client commands" in refused[0]
+        watcher.close()
+    assert refused and "another client commands" in refused[0] and len(reads) > 10
     assert crowded <= 1.10 * alone, (alone, crowded)
 
 
