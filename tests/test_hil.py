@@ -376,3 +376,32 @@ def test_a_terminated_server_does_not_wait_for_a_rig_job(tmp_path):
         rig.close()
     assert took < 1.0 and proc.returncode == 0, took
     assert any("server shutting down" in line for line in proc.log), proc.log[-5:]
+
+
+def test_replies_a_client_never_reads_are_bounded(tmp_path):
+    """A client asks for the last 1.5 MB frame 300 times and reads no reply (450 MB unbounded): the
+    server keeps at most QUEUED_REPLIES of them for it, its memory grows by far less, and it still
+    answers another client."""
+    import psutil
+
+    from hardware.net.server import QUEUED_REPLIES
+
+    keys = tmp_path / "keys"
+    with served_cell(keys, "--no-advertise") as (address, proc):
+        camera = NetClient(address, client_keys(keys), "camera")
+        camera.run("capture")
+        server = psutil.Process(proc.pid)
+        before = server.memory_info().rss
+        greedy = zmq.Context.instance().socket(zmq.DEALER)
+        greedy.setsockopt(zmq.LINGER, 0)
+        greedy.setsockopt(zmq.RCVHWM, 1)  # it reads nothing: what the server sends waits on the server's side
+        as_client(greedy, client_keys(keys))
+        greedy.connect(address)
+        for _ in range(300):
+            greedy.send_multipart([b"", wire.request("greedy", "camera", "last_frame")])
+        time.sleep(3.0)
+        grown = (server.memory_info().rss - before) / 2**20
+        assert camera.call("intrinsics")["width"] == 512  # still answering
+        greedy.close()
+        camera.close()
+    assert grown < (QUEUED_REPLIES + 16) * 1.6, grown  # at most the queued replies and the socket buffers
