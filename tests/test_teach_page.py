@@ -87,6 +87,10 @@ def test_a_demo_taught_in_the_browser_is_saved_rebuilds_the_templates_and_is_imi
     templates = sorted(p.name for p in out.glob("*.nit.npz"))
     assert templates == ["grasp-ibs-nif.nit.npz", "place-ibs-nif.nit.npz"]
     stamps = {p: p.stat().st_mtime_ns for p in out.glob("*.nit.npz")}
+    again = page.press("Save demo")  # the same demonstration saved again: nothing written, nothing rebuilt
+    assert "already saved as demo-00" in again, again
+    assert sorted(p.name for p in out.glob("demo-*.npz")) == ["demo-00.npz"]
+    assert {p: p.stat().st_mtime_ns for p in out.glob("*.nit.npz")} == stamps
 
     np.save(tmp_path / "cloud.npy", demo.cloud)
     imitated = subprocess.run([sys.executable, "-m", "app.cli", "imitate", "--task", "bowl", "--demos", str(out),
