@@ -57,6 +57,13 @@ def writable_file(path: str | Path, what: str) -> Path:
     return path
 
 
+def numbered(path: Path | None, i: int, count: int) -> Path | None:
+    """The file of item i of `count` written to `path`: the path itself for one, NAME-00.EXT ... for several."""
+    if path is None or count == 1:
+        return path
+    return path.with_name(f"{path.stem}-{i:02d}{path.suffix}")
+
+
 def write_json(path: str | Path, data: dict) -> Path:
     """Write JSON atomically (indented, keys in insertion order)."""
     with atomic_path(path) as tmp:

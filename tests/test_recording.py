@@ -12,7 +12,8 @@ import numpy as np
 import pytest
 
 from app.recording.layout import outcome_colour
-from app.recording.target import check_target, numbered
+from app.io_utils import numbered
+from app.recording.target import check_target
 from test_job_branches import Cell, grasp, predictor_of, run  # noqa: F401 - the fixtures `cell` and `scene` too
 from test_job_branches import cell, scene  # noqa: F401
 

@@ -55,10 +55,7 @@ def run(args: argparse.Namespace) -> int:
         raise ValueError("--record and --gui need the simulated cell in this process (--devices sim)")
     if args.devices == "sim":
         cell_config(args)  # a bad --config fails here, in a second, not after the job path's imports
-    if args.rerun is not None:
-        from app.recording.target import check_target
-
-        args.rerun_path = check_target(args.rerun)  # before the job starts
+    job_log = _job_log(args)  # the recording's path checked before the job starts
 
     from app.tasks.task import task
 
@@ -67,7 +64,7 @@ def run(args: argparse.Namespace) -> int:
     source = imported(args.object, t, args.method) if args.object else None
     if source is not None and args.devices == "net":
         raise ValueError("--object needs the simulated cell in this process (--devices sim)")
-    results = _run_net(args, t, config) if args.devices == "net" else _run_sim(args, t, config, source)
+    results = _run_net(args, t, config, job_log) if args.devices == "net" else _run_sim(args, t, config, job_log, source)
     return _report(results, args, t)
 
 
@@ -83,7 +80,7 @@ def imported(name: str, t, method: str):
     return source
 
 
-def _run_sim(args: argparse.Namespace, t, config, source=None) -> list:
+def _run_sim(args: argparse.Namespace, t, config, job_log, source=None) -> list:
     """The jobs in the simulated cell in this process (on the imported object `source`, if given)."""
     from tqdm import tqdm
 
@@ -108,13 +105,13 @@ def _run_sim(args: argparse.Namespace, t, config, source=None) -> list:
         T_base_cam = ensure_calibration(cell, args.calibration)
         scene = PlanningScene(cell_cfg)
         try:
-            return run_series(cell, scene, T_base_cam, specs, config, report, args.record, job_log=_job_log(args))
+            return run_series(cell, scene, T_base_cam, specs, config, report, args.record, job_log=job_log)
         finally:
             scene.close()
             bar.close()
 
 
-def _run_net(args: argparse.Namespace, t, config) -> list:
+def _run_net(args: argparse.Namespace, t, config, job_log) -> list:
     """The jobs against `nift serve`'s devices (`app.jobs.remote`)."""
     from dataclasses import replace
 
@@ -130,16 +127,18 @@ def _run_net(args: argparse.Namespace, t, config) -> list:
         T_base_cam = remote_calibration(cell, args.calibration)
         on_result = (lambda r: print(_line(r), flush=True)) if args.jobs > 1 and not args.json else (lambda r: None)
         return run_remote_series(cell, layout, t, [args.seed + i for i in range(args.jobs)], args.pose, T_base_cam,
-                                 config, on_result, job_log=_job_log(args))
+                                 config, on_result, job_log=job_log)
 
 
 def _job_log(args: argparse.Namespace):
-    """Job i's log: a Rerun recording with --rerun (`app.recording`), else none."""
+    """i -> job i's log: a Rerun recording with --rerun (`app.recording`; its path checked now), else none."""
     if args.rerun is None:
         return lambda i: None
-    from app.recording.target import numbered, open_log
+    from app.io_utils import numbered
+    from app.recording.target import check_target, open_log
 
-    return lambda i: open_log(numbered(args.rerun_path, i, args.jobs), f"seed-{args.seed + i}")
+    path = check_target(args.rerun)
+    return lambda i: open_log(numbered(path, i, args.jobs), f"seed-{args.seed + i}")
 
 
 def _report(results: list, args: argparse.Namespace, t) -> int:

@@ -29,7 +29,9 @@ Failure = Callable[[np.ndarray, str], "Blocked | None"]  # TCP pose (4, 4), what
 Widths = Callable[[np.ndarray], FingerWidths]  # grasp (4, 4) -> the fingers' openings on the way
 
 NO_DEMO_LIKE_GRASP = "no grasp like the demos'"  # how the reason of a NoDemoLikeGrasp begins
+PLANNED = "planned"  # the outcome of the pair the plan stage chose
 PICK_ONLY = "planned (pick only: the place waits for the second look)"
+HELD = "held"  # the outcome of an attempt whose grasp held
 
 
 @dataclass
@@ -95,7 +97,7 @@ def choose(planner: Planner, candidates: list[Candidate], q_start: np.ndarray,
             if plans >= most_plans:
                 break
             continue
-        tried.append(describe(c, "planned"))
+        tried.append(describe(c, PLANNED))
         return Choice(plan, c, tried)
     if pick_only and (picked := _pick_alone(planner, candidates, q_start, quick, most_plans, widths)):
         tried.append(describe(picked.candidate, PICK_ONLY))

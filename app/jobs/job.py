@@ -32,14 +32,13 @@ from app.categories import REVOLUTION
 from app.failures import (CONNECTION_LOST, INTERNAL_ERROR, CellFailure, GraspMissed, GraspSlipped, NoCandidate, PlaceFailed, PlaceMissed,
                           ReleaseJammed)
 from app.jobs.check import sighting
-from app.jobs.choice import choose, describe
+from app.jobs.choice import HELD, choose, describe
 from app.jobs.clearance import approach_blocked, gripper_clear
 from app.jobs.context import JobContext, Placer, Predictor
 from app.jobs.guarded import guarded_leave, guarded_line, guarded_place, guarded_set_down
 from app.jobs.held_place import look_and_place
 from app.jobs.hold import holding, object_axis, on_object
 from app.jobs.log import JobLog, LoggedCamera
-from app.layout import fixture_meshes
 from app.jobs.motion_meter import MeteredArm
 from app.jobs.record import STAGES, JobHooks, JobResult, check_held, ur
 from app.jobs.settings import JobConfig, looks_again
@@ -92,7 +91,6 @@ def run_job(t: Task, arm: Arm, gripper: Gripper, camera: DepthCamera, T_base_cam
     job_log.begin(t, config.method, arm.getTimestamp)
     if job_log.active:
         camera = LoggedCamera(camera, job_log, T_base_cam)
-        job_log.fixtures(fixture_meshes(scene.layout))
     use_threads(config.threads)
     kin = UR5Kinematics(tcp_offset=ur_to_pose(arm.getTCPOffset()))
     settings = config.predict
@@ -129,6 +127,8 @@ def run_job(t: Task, arm: Arm, gripper: Gripper, camera: DepthCamera, T_base_cam
 
 
 def _run(job: JobContext) -> None:
+    if job.log.active:
+        job.log.fixtures(job.fixture_meshes)
     planner = Planner(job.kin, job.arm.joint_limits, job.scene, job.config.motion)
     options, seen, slips = None, None, []
     for attempt in range(1, job.config.attempts + 1):
@@ -157,7 +157,7 @@ def _run(job: JobContext) -> None:
         except CellFailure as failed:  # the attempt ends the job: its record says how
             job.result.attempts.append({"attempt": attempt, **describe(chosen, str(failed))})
             raise
-        job.result.attempts.append({"attempt": attempt, **describe(chosen, "held")})
+        job.result.attempts.append({"attempt": attempt, **describe(chosen, HELD)})
         job.result.failed_stage = None
         try:
             _place(job, planner, plan, sent, again=not last)

@@ -22,7 +22,7 @@ import rerun as rr
 
 from app.jobs.log import JobLog
 from app.recording import layout as L
-from app.recording.robot import RobotModel
+from app.recording.robot import RobotModel, log_in_base
 from hardware.interfaces import Frame
 from hardware.se3 import transform_points, ur_to_pose
 
@@ -33,7 +33,6 @@ class RerunJobLog(JobLog):
     active = True
 
     def __init__(self, path: Path | None, name: str = "job") -> None:
-        self.path = path
         self.rec = rr.RecordingStream("nift-cell", recording_id=f"{name}-{uuid.uuid4().hex[:8]}")
         if path is None:
             spawn_viewer(self.rec)
@@ -43,9 +42,7 @@ class RerunJobLog(JobLog):
         self.clock: Callable[[], float] = lambda: 0.0
         self.t0 = time.perf_counter()
         self.samples: list[tuple[float, float, np.ndarray, np.ndarray, float, float, np.ndarray]] = []
-        self.events: list[tuple[float, str, str]] = []  # (sim time, stage, event)
         self.templates: dict[str, np.ndarray] = {}
-        self._framed: set[str] = set()
 
     # the job's events ------------------------------------------------------------------------
     def begin(self, t, method: str, clock: Callable[[], float]) -> None:
@@ -64,8 +61,7 @@ class RerunJobLog(JobLog):
                         static=True)
 
     def stage(self, name: str, event: str) -> None:
-        now = self._now()
-        self.events.append((now, name, event))
+        self._now()
         self.rec.log(L.STAGES, rr.TextLog(f"{name} {event}", level="ERROR" if event == "failed" else "INFO"))
 
     def look(self, frame: Frame, T_base_cam: np.ndarray) -> None:
@@ -115,19 +111,13 @@ class RerunJobLog(JobLog):
         self.rec.disconnect()
 
     # helpers ---------------------------------------------------------------------------------
-    def _now(self) -> float:
-        """Set both timelines to now; the controller's time."""
-        sim = float(self.clock())
-        self.rec.set_time("sim", duration=sim)
+    def _now(self) -> None:
+        """Set both timelines to now."""
+        self.rec.set_time("sim", duration=float(self.clock()))
         self.rec.set_time("wall", duration=time.perf_counter() - self.t0)
-        return sim
 
     def _world(self, path: str, archetype, static: bool = False) -> None:
-        """Log in the UR base frame (the URDF's `base` link)."""
-        if path not in self._framed:
-            self.rec.log(path, rr.CoordinateFrame("base"), static=True)
-            self._framed.add(path)
-        self.rec.log(path, archetype, static=static)
+        log_in_base(self.rec, path, archetype, static)
 
     def _log_nit(self, candidate) -> None:
         """The templates' query points at the chosen pair: the grasp's in the TCP frame at the grasp, the
@@ -142,17 +132,7 @@ class RerunJobLog(JobLog):
             return
         sim, wall, q, tcp, width, grip, force = (np.array(v) for v in zip(*self.samples))
         times = [rr.TimeColumn("sim", duration=sim), rr.TimeColumn("wall", duration=wall)]
-        self.robot.send_joints(self.rec, times, q)
-        for j in range(6):
-            self.rec.send_columns(f"{L.JOINTS}/j{j + 1}", indexes=times, columns=rr.Scalars.columns(scalars=q[:, j]))
-        self.rec.send_columns(L.GRIPPER_WIDTH, indexes=times, columns=rr.Scalars.columns(scalars=width))
-        self.rec.send_columns(L.GRIPPER_FORCE, indexes=times, columns=rr.Scalars.columns(scalars=grip))
-        self.rec.send_columns(L.TOOL_FORCE, indexes=times,
-                              columns=rr.Scalars.columns(scalars=np.linalg.norm(force[:, :3], axis=1)))
-        poses = [ur_to_pose(p) for p in tcp]
-        self.rec.log(L.TCP, rr.CoordinateFrame("base"), static=True)
-        self.rec.send_columns(L.TCP, indexes=times, columns=rr.Transform3D.columns(
-            translation=[T[:3, 3] for T in poses], mat3x3=[T[:3, :3] for T in poses]))
+        self.robot.send_state(self.rec, times, q, tcp, width, grip, force)
 
 
 def spawn_viewer(rec: rr.RecordingStream) -> None:

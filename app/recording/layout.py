@@ -1,13 +1,13 @@
 """The entity paths of a job's recording (docs/recording.md), the gripper's outline drawn at a pose,
-and the blueprint the viewer opens on. Everything under WORLD is in the UR `base` frame, the frame of
-every pose the job reports."""
+and the blueprint the viewer opens on. Everything under `world/` is in the UR `base` frame, the frame
+of every pose the job reports (`app.recording.robot.log_in_base`)."""
 from __future__ import annotations
 
 import numpy as np
 
+from app.jobs.choice import HELD, PICK_ONLY, PLANNED
 from hardware.se3 import transform_points
 
-WORLD = "world"  # CoordinateFrame("base"): the UR base frame
 FIXTURES = "world/fixtures"  # /<i>: the rack, the shelf, ... as meshes
 CAMERA = "world/camera"  # the camera's eye and viewing direction
 IMAGES = "camera"  # /image (RGB), /depth (m): each frame the camera captured
@@ -17,6 +17,7 @@ NIT = "world/nit"  # /grasp, /place: the templates' query points at the chosen p
 CANDIDATES = "world/candidates"  # /<i>: every pair looked at, coloured by outcome; its outcome (the reason) as a value
 PLAN = "world/plan"  # /<segment>: the TCP's path along each planned segment
 TCP = "world/tcp"  # the TCP as the arm reported it
+DEMOS = "world/demos"  # /<demo>/grasp, /place: a teach-in session's saved demos
 ROBOT = "robot"  # the URDF's meshes; /joints/<joint>: the joints' transforms
 JOINTS = "plots/joints"  # /j1 ... /j6: joint angles (rad)
 GRIPPER_WIDTH = "plots/gripper/width"  # m
@@ -24,7 +25,6 @@ GRIPPER_FORCE = "plots/gripper/force"  # N the fingers press with
 TOOL_FORCE = "plots/tool/force"  # N: |F| on the tool
 STAGES = "job/stages"  # a text log: each stage's start and end
 VERDICT = "job/verdict"  # the outcome, and the record as JSON
-TIMELINES = ("sim", "wall")  # the arm's clock (s); seconds since the job began
 
 GREEN, RED, BLUE, GREY = (40, 200, 80), (220, 60, 50), (60, 120, 255), (160, 160, 160)
 FIXTURE_COLOUR = (150, 110, 70)
@@ -41,8 +41,8 @@ def gripper_outline(T_base_tcp: np.ndarray, opening: float = 0.085, finger: floa
 
 
 def outcome_colour(outcome: str) -> tuple[int, int, int]:
-    """Green for a pair that planned or held, red for one ruled out."""
-    return GREEN if outcome == "held" or outcome.startswith("planned") else RED
+    """Green for a pair that planned or held (`app.jobs.choice`'s outcomes), red for one ruled out."""
+    return GREEN if outcome in (HELD, PLANNED, PICK_ONLY) else RED
 
 
 def blueprint(timeline: str = "sim"):

@@ -31,13 +31,6 @@ def check_target(value: str | None, flag: str = "--rerun", folder: bool = False)
     return path
 
 
-def numbered(path: Path | None, i: int, count: int) -> Path | None:
-    """The recording of job i of `count`: the path itself for one job, NAME-00.rrd ... for a series."""
-    if path is None or count == 1:
-        return path
-    return path.with_name(f"{path.stem}-{i:02d}{path.suffix}")
-
-
 def open_log(path: Path | None, name: str):
     """A `RerunJobLog` writing to `path` (None: a spawned viewer); Rerun is imported here, not before."""
     from app.recording.job_log import RerunJobLog

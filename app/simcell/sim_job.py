@@ -13,6 +13,7 @@ from typing import Callable
 
 import numpy as np
 
+from app.io_utils import numbered
 from app.jobs.job import JobConfig, JobHooks, JobResult, Predictor, run_job
 from app.jobs.log import JobLog
 from app.motion.scene import PlanningScene
@@ -157,7 +158,7 @@ def run_series(cell: SimCell, scene: PlanningScene, T_base_cam: np.ndarray, spec
         if fresh_client_before(i, refresh_every):
             cell.refresh()
             scene.rebuild()
-        path = record if record is None or len(specs) == 1 else record.with_name(f"{record.stem}-{i:02d}{record.suffix}")
-        results.append(run_sim_job(cell, scene, T_base_cam, spec, config, path, job_log=job_log(i)))
+        results.append(run_sim_job(cell, scene, T_base_cam, spec, config, numbered(record, i, len(specs)),
+                                   job_log=job_log(i)))
         on_result(results[-1])
     return results
