@@ -250,12 +250,8 @@ class DeviceServer:
         """Busy while another client commands an arm (or a rig that moves one), its lease live: the served
         devices share one motion thread (one physics world), and a capture queued there (~0.1 s each)
         would stretch that client's motions. A camera's or gripper's commander blocks no one."""
-        now = time.monotonic()
-        for name, held in self._control.items():
-            svc = self.services[name]
-            if held.client == client or not (svc.watchdog or svc.moves):
-                continue
-            if self._running(name) or now - self._seen.get(held.client, 0.0) < self.config.lease:
+        for name, svc in self.services.items():
+            if (svc.watchdog or svc.moves) and self._held_by_other(client, name) is not None:
                 raise Refused("Busy", f"{device} {verb[:40]}: another client commands {name} "
                                       f"(read state, or last_frame, meanwhile)")
 
@@ -298,14 +294,19 @@ class DeviceServer:
 
     def _check_claim(self, client: str, device: str) -> None:
         """Busy unless `client` may command `device` now."""
-        now = time.monotonic()
+        held = self._held_by_other(client, device)
+        if held is not None:
+            LOG.warning("refused %r commanding %s: client %r commands it", client[:40], device, held.client[:40])
+            raise Refused("Busy", f"{device} is commanded by another client ({held.client[:40]}, for "
+                                  f"{time.monotonic() - held.since:.1f} s); a second client may read it but not command it")
+
+    def _held_by_other(self, client: str, device: str) -> _Control | None:
+        """Another client's hold on `device` while it lasts: a job of its runs, or it spoke within the lease."""
         held = self._control.get(device)
-        if held is not None and held.client != client:
-            silent = now - self._seen.get(held.client, 0.0)
-            if self._running(device) or silent < self.config.lease:
-                LOG.warning("refused %r commanding %s: client %r commands it", client[:40], device, held.client[:40])
-                raise Refused("Busy", f"{device} is commanded by another client ({held.client[:40]}, for "
-                                      f"{now - held.since:.1f} s); a second client may read it but not command it")
+        if held is None or held.client == client:
+            return None
+        silent = time.monotonic() - self._seen.get(held.client, 0.0)
+        return held if self._running(device) or silent < self.config.lease else None
 
     def _claim(self, client: str, device: str) -> None:
         self._check_claim(client, device)
