@@ -81,7 +81,7 @@ def web(args: argparse.Namespace, t, out: Path) -> int:
     if args.rerun:
         from app.recording.target import check_target
 
-        check_target(str(out.parent / f"{out.name}-session.rrd"), "--rerun")  # the folder can be written
+        check_target(str(out.parent), "--rerun", folder=True)  # where the session's recording goes (beside `out`)
 
     from app.simcell.calibration import ensure_calibration
     from app.simcell.cell import SimCell
