@@ -10,14 +10,17 @@ from ruckig import InputParameter, Result, Ruckig, Synchronization, Trajectory
 
 
 def ruckig_profile(q0: np.ndarray, q1: np.ndarray, v_max: np.ndarray, a_max: np.ndarray,
-                   j_max: np.ndarray, straight: bool = False) -> Trajectory:
-    """Time-optimal jerk-limited rest-to-rest trajectory from q0 to q1 (Ruckig, offline); `straight`:
-    phase-synchronised, every joint on the same profile scaled, so the path is the straight joint-space
-    segment q0 -> q1 (a UR's moveJ; what a planner checked between its waypoints)."""
+                   j_max: np.ndarray, straight: bool = False, v0: np.ndarray | None = None,
+                   v1: np.ndarray | None = None) -> Trajectory:
+    """Time-optimal jerk-limited trajectory from q0 to q1 (Ruckig, offline), at rest at both ends unless
+    the velocities `v0`, `v1` are given (a motion through a via point), at zero acceleration there;
+    `straight`: phase-synchronised, every joint on the same profile scaled, so a rest-to-rest path is the
+    straight joint-space segment q0 -> q1 (a UR's moveJ; what a planner checked between its waypoints)."""
     dof = len(q0)
+    rest = [0.0] * dof
     inp = InputParameter(dof)
-    inp.current_position, inp.current_velocity, inp.current_acceleration = list(q0), [0.0] * dof, [0.0] * dof
-    inp.target_position, inp.target_velocity, inp.target_acceleration = list(q1), [0.0] * dof, [0.0] * dof
+    inp.current_position, inp.current_velocity, inp.current_acceleration = list(q0), _list(v0, dof), rest
+    inp.target_position, inp.target_velocity, inp.target_acceleration = list(q1), _list(v1, dof), rest
     inp.max_velocity, inp.max_acceleration, inp.max_jerk = list(v_max), list(a_max), list(j_max)
     if straight:
         inp.synchronization = Synchronization.Phase
@@ -26,3 +29,7 @@ def ruckig_profile(q0: np.ndarray, q1: np.ndarray, v_max: np.ndarray, a_max: np.
     if result not in (Result.Working, Result.Finished):
         raise ValueError(f"Ruckig could not plan the motion ({result})")
     return traj
+
+
+def _list(v: np.ndarray | None, dof: int) -> list[float]:
+    return [0.0] * dof if v is None else [float(x) for x in v]

@@ -197,8 +197,8 @@ def test_a_job_that_looks_again_picks_a_reachable_grasp_whose_first_look_place_i
 @pytest.mark.slow
 def test_a_mug_hung_at_its_hang_drags_on_the_peg_only_when_bullet_thickens_the_hulls():
     """The oracle's mug of seed 5 placed at its hang (no clearance): at Bullet's default hull margin
-    (1 mm) its handle's hole closes on the peg, the handle drags along the place line and the mug
-    is let go off the rack (the first place misses; the job finds it again); at the cell's 0.2 mm
+    (1 mm) its handle's hole closes on the peg and the handle drags along the place line: the mug does
+    not hang from the first place (let go off the rack, or dragging the arm into a stop); at the cell's 0.2 mm
     (`SimWorldConfig.mesh_margin`) the peg passes through and it hangs at the first place, as it does
     placed `MotionConfig.peg_clearance` (12 mm) above and dropped."""
     from app.motion.config import MotionConfig
@@ -206,7 +206,7 @@ def test_a_mug_hung_at_its_hang_drags_on_the_peg_only_when_bullet_thickens_the_h
     at_hang = JobConfig.of("teacher", motion=MotionConfig(peg_clearance=0.0))
     thick = replace(CellConfig(), world=replace(CellConfig().world, mesh_margin=0.001))
     dragged = _sim(JobSpec(task("mug"), seed=5), at_hang, config=thick)
-    assert dragged.attempts[0]["outcome"].startswith("place missed"), dragged.attempts
+    assert not (dragged.success and [a["outcome"] for a in dragged.attempts] == ["held"]), dragged.attempts
     result = _sim(JobSpec(task("mug"), seed=5), at_hang)
     assert result.success, result.reason
     assert [a["outcome"] for a in result.attempts] == ["held"]

@@ -27,6 +27,7 @@ from app.motion.planner import OBJECT, Planner
 from app.perception import PerceptionConfig, held_object_cloud
 from hardware.interfaces import Arm, DepthCamera, JointLimits
 from hardware.se3 import invert, transform_points
+from hardware.settings import check_ranges
 
 
 @dataclass(frozen=True)
@@ -36,6 +37,12 @@ class SecondLookConfig:
     turns: tuple[float, ...] = (0.0, np.pi)  # rad on the wrist's last joint from the lift's end, one view each
     reach: float = 0.08  # m the crop reaches beyond the first cloud's extent: a handle hidden in the first view lies up to ~7 cm past it
     gripper_margin: float = 0.01  # m: points this close to the gripper's boxes are the gripper's
+    turn_speed: float = 3.0  # rad/s of the wrist's turn: within its 3.2; the fingers' axis stays put, so the held
+    # object barely swings (docs/decisions.md, "The second look's turn")
+    turn_acceleration: float = 8.0  # rad/s^2, within the wrist's 12
+
+    def __post_init__(self) -> None:
+        check_ranges(self, (("turn_speed", 0.0, 3.2, "rad/s", False), ("turn_acceleration", 0.0, 12.0, "rad/s^2", False)))
 
 
 def view_q(q: np.ndarray, turn: float, limits: JointLimits) -> np.ndarray:
@@ -67,8 +74,9 @@ def second_look(arm: Arm, camera: DepthCamera, planner: Planner, T_base_cam: np.
         q = view_q(start_q, turn, arm.joint_limits)
         if np.abs(q - arm.getActualQ()).max() > tolerance:
             with planner.scene.holding(OBJECT, T_base_grasp), planner.scene.fingers(width):
-                # the empty arm's speed: a turn of the wrist alone barely swings what it holds (docs/decisions.md)
-                execute(arm, planner.transit(arm.getActualQ(), q, "second look", ignore=(OBJECT,)), tolerance)
+                turn = planner.transit(arm.getActualQ(), q, "second look", ignore=(OBJECT,),
+                                       profile=(config.turn_speed, config.turn_acceleration))
+                execute(arm, turn, tolerance)
         T_view = planner.kin.fk(arm.getActualQ())
         near = transform_points(T_view @ invert(T_base_grasp), first.mean(axis=0, keepdims=True))[0]
         seen = held_object_cloud(camera.capture(), T_base_cam, T_view, width, near, radius, perception,

@@ -39,6 +39,7 @@ class MotionConfig:
     # the place (faster, a bottle set down on the shelf fell over and lying bottles slipped)
     gentle_line_acceleration: float = 0.6  # m/s^2
     gentle_line_jerk: float = 5.0  # m/s^3
+    blend: bool = True  # a sampled transit passes its waypoints without stopping where that stays free (app.motion.blend)
     check_step: float = 0.02  # rad: a transit is collision-checked wherever a joint has moved this far
     end_tolerance: float = 0.02  # rad: a segment that ends farther than this from its target failed
     ik_candidates: int = 8  # IK branches tried at the grasp and at the place before giving up (all of them)

@@ -13,9 +13,13 @@ Plan (all of it before the arm moves, so an unreachable place fails before the p
     retreat -> clear          straight line up
     clear -> home             joint transit
 
-A two-finger grasp turned half a turn about its approach axis is the same grasp: the turn whose
-IK is nearer the arm is planned first, the other only if it fails. A transit whose direct joint
-motion would collide follows a path of OMPL's RRT-Connect (`app.motion.sampling`).
+A job ends where it began, at home, so its IK branches are chosen for the whole job's joint travel:
+the grasp's branches in the order of the estimated round trip start -> grasp -> place -> home
+(`_round_trip`, over the place's branches), the place's in the order of carry plus way home. A
+two-finger grasp turned half a turn about its approach axis is the same grasp: the turn with the
+shorter round trip is planned first, the other only if it fails. A transit whose direct joint motion
+would collide follows a path of OMPL's RRT-Connect (`app.motion.sampling`), passing its waypoints
+without stopping where that stays free (`app.motion.blend`).
 """
 from __future__ import annotations
 
@@ -26,6 +30,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from app.failures import NoPath, PathCollides, PlanningFailure
+from app.motion.blend import blend_checked
 from app.motion.cartesian import line_path
 from app.motion.config import MotionConfig
 from app.motion.ik import joint_distance, solutions
@@ -89,12 +94,15 @@ class Planner:
 
     def transit(self, q0: np.ndarray, q1: np.ndarray, label: str, ignore: tuple[str, ...] = (),
                 allowed: Callable[[np.ndarray], bool] | None = None,
-                search: SamplingConfig | None = None, held: bool = False) -> JointTrajectory:
+                search: SamplingConfig | None = None, held: bool = False,
+                profile: tuple[float, float] | None = None) -> JointTrajectory:
         """A collision-free chain of Ruckig joint motions q0 -> q1: the direct one, else through the
         waypoints of the sampling planner (`app.motion.sampling`); `allowed`: a path constraint on
         every state (`held_without_pivot`); `search`: the planner's settings (the configured ones when None);
-        `held`: the object is in the fingers (timed at the carry's speed)."""
-        direct = self._timed(np.array([q0, q1]), label, held=held)
+        `held`: the object is in the fingers (timed at the carry's speed); `profile`: (speed rad/s,
+        acceleration rad/s^2) instead of either."""
+        profile = profile or self._profile(held)
+        direct = self._timed(np.array([q0, q1]), label, profile=profile)
         hits = self._collisions(direct, ignore, allowed)
         if not hits:
             return direct
@@ -102,10 +110,14 @@ class Planner:
             waypoints = plan_joint_path(self.scene, q0, q1, ignore, search or self.config.sampling, allowed)
         except NoPath as exc:
             raise NoPath(f"{label}: {exc} (the direct one hits {', '.join(hits[:3])})") from None
+        if self.config.blend:  # through the waypoints without a stop at each (app.motion.blend)
+            traj = self._blended(waypoints, label, profile, ignore, allowed)
+            if not self._collisions(traj, ignore, allowed):
+                return traj
         dense = densify(waypoints, self.config.sampling.max_step / 2)
         # last, on the very segments the planner checked (docs/decisions.md)
         for path, straight in ((waypoints, False), (dense, False), (waypoints, True)):
-            traj = self._timed(path, label, straight, held)
+            traj = self._timed(path, label, straight, profile)
             if not self._collisions(traj, ignore, allowed):
                 return traj
         raise PathCollides(f"{label}: the sampled joint path collides once timed ({', '.join(hits[:3])} on the direct one)")
@@ -135,12 +147,30 @@ class Planner:
         r = transform_points(invert(T_base_grasp), solid.mean(axis=0, keepdims=True))[0]  # (3,) TCP frame
         return float(np.hypot(r[0], r[2]))
 
-    def _timed(self, waypoints: np.ndarray, label: str, straight: bool = False, held: bool = False) -> JointTrajectory:
-        """Ruckig rest-to-rest segments through joint waypoints (K, 6); `straight`: phase-synchronised;
-        `held`: at the carry's speed and acceleration."""
+    def _profile(self, held: bool) -> tuple[float, float]:
+        """(speed rad/s, acceleration rad/s^2) of a transit: the carry's while the object is held."""
         c = self.config
-        speed, acceleration = (c.carry_speed, c.carry_acceleration) if held else (c.joint_speed, c.joint_acceleration)
-        return through_waypoints(list(waypoints), self.limits, speed, acceleration, label, straight)
+        return (c.carry_speed, c.carry_acceleration) if held else (c.joint_speed, c.joint_acceleration)
+
+    def _blended(self, waypoints: np.ndarray, label: str, profile: tuple[float, float], ignore: tuple[str, ...],
+                 allowed: Callable[[np.ndarray], bool] | None) -> JointTrajectory:
+        """The sampled path's waypoints passed without stopping where the blend stays free (`blend_checked`)."""
+        c = self.config
+
+        def first_bad(traj: JointTrajectory) -> float | None:
+            for k in [*checked_indices(traj.q, c.check_step), len(traj.q) - 1]:
+                q = traj.q[k]
+                if not self.limits.contains(q) or self.scene.collisions(q, ignore) or (allowed and not allowed(q)):
+                    return float(traj.times[k])
+            return None
+
+        return blend_checked(waypoints, self.limits, *profile, label, first_bad)
+
+    def _timed(self, waypoints: np.ndarray, label: str, straight: bool = False,
+               profile: tuple[float, float] | None = None) -> JointTrajectory:
+        """Ruckig rest-to-rest segments through joint waypoints (K, 6); `straight`: each on its straight segment;
+        `profile`: (speed, acceleration), the empty arm's transit when None."""
+        return through_waypoints(list(waypoints), self.limits, *(profile or self._profile(False)), label, straight)
 
     def line(self, q0: np.ndarray, T1: np.ndarray, label: str, ignore: tuple[str, ...] = (),
              gentle: bool = False) -> JointTrajectory:
@@ -166,7 +196,7 @@ class Planner:
         widths = widths or FingerWidths.fully_open(self.scene.geometry.stroke)
         errors: list[PlanningFailure] = []
         plans = []  # a plan whose carry may pivot the object is kept while the other half-turn is tried
-        for flip in self._flips_nearest_first(q_start, T_base_grasp):
+        for flip in self._flips_nearest_first(q_start, T_base_grasp, T_base_place):
             try:
                 T_place = None if T_base_place is None else T_base_place @ flip
                 plans.append(self._pick_place(q_start, T_base_grasp @ flip, T_place, place_direction, widths))
@@ -181,14 +211,17 @@ class Planner:
             return plan
         raise type(errors[0])(" / ".join(dict.fromkeys(str(e) for e in errors)))  # the first half-turn's kind
 
-    def _flips_nearest_first(self, q_start: np.ndarray, T_base_grasp: np.ndarray) -> list[np.ndarray]:
-        """The grasp and its half-turn, the one whose nearest IK branch is nearer q_start first (the
-        other is planned only if the first cannot be)."""
-        def distance(flip: np.ndarray) -> float:
+    def _flips_nearest_first(self, q_start: np.ndarray, T_base_grasp: np.ndarray,
+                             T_base_place: np.ndarray | None = None) -> list[np.ndarray]:
+        """The grasp and its half-turn, the one with the shortest job first (`_round_trip` over its IK
+        branches; without a place, the branch nearest q_start): the other is planned only if the first cannot be."""
+        def cost(flip: np.ndarray) -> float:
             branches = self.kin.ik_all(T_base_grasp @ flip, q_start)
-            return min((joint_distance(q, q_start, self.config.ik.joint_weights) for q in branches), default=np.inf)
+            if T_base_place is None:
+                return min((joint_distance(q, q_start, self.config.ik.joint_weights) for q in branches), default=np.inf)
+            return min((self._round_trip(q_start, q, T_base_place @ flip) for q in branches), default=np.inf)
 
-        return sorted((np.eye(4), HALF_TURN), key=distance)
+        return sorted((np.eye(4), HALF_TURN), key=cost)
 
     def _pick_place(self, q_start, T_grasp, T_place, place_direction, widths) -> PickPlacePlan:
         c = self.config
@@ -200,12 +233,18 @@ class Planner:
         def grasp_lines(q: np.ndarray):
             with self.scene.fingers(widths.held):
                 lift = self._first_line(q, lifts, "lift", gentle=True)  # shorter lifts: the carry that follows is checked
+            if T_place is not None:
+                with self.scene.holding(OBJECT, T_grasp), self.scene.fingers(widths.held):
+                    if hits := self.scene.collisions(lift.end, (OBJECT,)):  # the carry would start in collision:
+                        raise PathCollides(f"lift: the held object meets the arm at its end ({', '.join(hits[:3])})")
             with self.scene.fingers(widths.approach):
                 return reverse(self._first_line(q, approaches, "approach", gentle=True)), lift
 
         # IK at the ends of the lines first: they decide the configuration each line runs in
         with self.scene.fingers(widths.approach):
             at_grasp = solutions(self.kin, T_grasp, q_start, self.scene, c.ik, (OBJECT,), "grasp")
+        if T_place is not None:
+            at_grasp.sort(key=lambda q: self._round_trip(q_start, q, T_place))
         approach, lift = self._first(at_grasp, grasp_lines)
         with self.scene.fingers(widths.approach):
             to_pre_grasp = self.transit(q_start, approach.q[0], "to pre-grasp")
@@ -214,6 +253,14 @@ class Planner:
         segments = [to_pre_grasp, approach, lift, *rest]
         travel = float(sum(np.abs(np.diff(s.q, axis=0)).sum() for s in segments))
         return PickPlacePlan(segments, T_grasp, T_place, travel=travel, carry_may_pivot=pivot, widths=widths)
+
+    def _round_trip(self, q_start: np.ndarray, q_grasp: np.ndarray, T_place: np.ndarray) -> float:
+        """The joint travel (rad, summed over the joints) of a job through the grasp's IK branch q_grasp: from
+        q_start to it, on to the place's branch that makes the rest shortest, and home - an estimate, the
+        transits taken as straight and the lines left out."""
+        home = np.asarray(self.config.home_q)
+        rest = [travel(q_grasp, q) + travel(q, home) for q in self.kin.ik_all(T_place, q_grasp)]
+        return travel(q_start, q_grasp) + min(rest, default=0.0)
 
     def place_from(self, q_now: np.ndarray, T_base_grasp: np.ndarray, T_base_place: np.ndarray,
                    place_direction: np.ndarray, widths: FingerWidths | None = None) -> PickPlacePlan:
@@ -240,6 +287,8 @@ class Planner:
 
         with self.scene.fingers(held):
             at_place = solutions(self.kin, T_place, q_from, self.scene, c.ik, (OBJECT,), "place")
+        home = np.asarray(c.home_q)
+        at_place.sort(key=lambda q: travel(q_from, q) + travel(q, home))  # the carry and the way home, shortest first
         for distance in c.place_distances:  # farther out when the held hull meets the fixture at the pre-place
             T_pre_place = make_pose(T_place[:3, :3], T_place[:3, 3] + distance * np.asarray(place_direction))
             place, retreat, clear = self._first(at_place, lambda q: place_lines(q, T_pre_place))
@@ -249,8 +298,8 @@ class Planner:
         with self.scene.holding(OBJECT, T_grasp), self.scene.fingers(held):  # the carried object must clear the cell too
             carry, kept = self.carry(q_from, place.q[0], (OBJECT,), self.held_lever(T_grasp))
         with self.scene.fingers(released):
-            home = self.transit(clear.end, np.asarray(c.home_q), "home", ignore=(OBJECT,))
-        return [carry, place, retreat, clear, home], not kept
+            back = self.transit(clear.end, home, "home", ignore=(OBJECT,))
+        return [carry, place, retreat, clear, back], not kept
 
     def _retreat_and_clear(self, q: np.ndarray, T_place: np.ndarray,
                            touching: tuple[str, ...] = ()) -> tuple[JointTrajectory, JointTrajectory]:
@@ -331,15 +380,25 @@ def held_without_pivot(kin: UR5Kinematics, q0: np.ndarray, q1: np.ndarray, extra
     return lambda q: bool(swing(q) <= limit)
 
 
+def travel(q0: np.ndarray, q1: np.ndarray) -> float:
+    """Joint travel (rad) of a straight joint motion: the joints' distances summed."""
+    return float(np.abs(np.asarray(q1) - np.asarray(q0)).sum())
+
+
 def checked_samples(q: np.ndarray, step: float) -> np.ndarray:
-    """The samples of a joint path (K, 6) to collision-check: the first, then each that has moved more
-    than `step` rad on some joint since the last one kept - as dense at any speed."""
+    """The samples of a joint path (K, 6) to collision-check (`checked_indices`)."""
+    return q[checked_indices(q, step)]
+
+
+def checked_indices(q: np.ndarray, step: float) -> list[int]:
+    """Which samples of a joint path (K, 6) to collision-check: the first, each that has moved more than
+    `step` rad on some joint since the last one kept - as dense at any speed."""
     kept, last = [0], q[0]
     for i in range(1, len(q)):
         if np.abs(q[i] - last).max() > step:
             kept.append(i)
             last = q[i]
-    return q[kept]
+    return kept
 
 
 def first_that_works(items: list, attempt):

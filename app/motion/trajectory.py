@@ -19,12 +19,14 @@ SAMPLE_PERIOD = 1.0 / 250.0  # s between trajectory samples streamed to the arm
 
 @dataclass
 class JointTrajectory:
-    """A timed joint path: times (T,) from 0, positions (T, D), velocities (T, D)."""
+    """A timed joint path: times (T,) from 0, positions (T, D), velocities (T, D); accelerations (T, D)
+    where the profile gave them."""
 
     times: np.ndarray
     q: np.ndarray
     qd: np.ndarray
     label: str = ""
+    qdd: np.ndarray | None = None
 
     @property
     def duration(self) -> float:
@@ -37,20 +39,49 @@ class JointTrajectory:
 
 def sample_profile(profile: Trajectory, period: float = SAMPLE_PERIOD) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(times (T,), positions (T, D), velocities (T, D)) of a Ruckig trajectory, both ends included."""
+    times, q, qd, _ = sample_states(profile, period)
+    return times, q, qd
+
+
+def sample_states(profile: Trajectory, period: float = SAMPLE_PERIOD) -> tuple[np.ndarray, ...]:
+    """(times (T,), positions, velocities, accelerations (T, D)) of a Ruckig trajectory, both ends included."""
     n = max(2, int(np.ceil(profile.duration / period)) + 1)
     times = np.linspace(0.0, profile.duration, n)
     states = [profile.at_time(t) for t in times]
-    return times, np.array([s[0] for s in states]), np.array([s[1] for s in states])
+    return times, *(np.array([s[k] for s in states]) for k in range(3))
 
 
 def joint_segment(q0: np.ndarray, q1: np.ndarray, limits: JointLimits, speed: float = 1.05,
                   acceleration: float = 1.4, label: str = "", straight: bool = False) -> JointTrajectory:
     """One rest-to-rest joint motion, at most `speed` rad/s and `acceleration` rad/s^2 on any joint
     (ur_rtde's moveJ defaults) and never beyond the limits; `straight`: on the joint-space segment
-    q0 -> q1 (`hardware.motion_profile.ruckig_profile`)."""
-    profile = ruckig_profile(np.asarray(q0, float), np.asarray(q1, float), np.minimum(speed, limits.velocity),
-                             np.minimum(acceleration, limits.acceleration), limits.jerk, straight)
-    return JointTrajectory(*sample_profile(profile), label=label)
+    q0 -> q1 (`straight_segment`)."""
+    q0, q1 = np.asarray(q0, float), np.asarray(q1, float)
+    v_max, a_max = np.minimum(speed, limits.velocity), np.minimum(acceleration, limits.acceleration)
+    if straight:
+        return straight_segment(q0, q1, v_max, a_max, limits.jerk, label)
+    times, q, qd, qdd = sample_states(ruckig_profile(q0, q1, v_max, a_max, limits.jerk))
+    return JointTrajectory(times, q, qd, label, qdd)
+
+
+def straight_segment(q0: np.ndarray, q1: np.ndarray, v_max: np.ndarray, a_max: np.ndarray, j_max: np.ndarray,
+                     label: str = "") -> JointTrajectory:
+    """The time-optimal rest-to-rest motion along the straight joint-space segment q0 -> q1 (a UR's moveJ;
+    what a planner checked between its waypoints): a 1-D Ruckig profile of the arc length s in [0, L],
+
+        q(t) = q0 + s(t) u,    u = (q1 - q0) / L,    limits on s: min_j (v_max,j, a_max,j, j_max,j) / |u_j|
+
+    exactly on the segment (Ruckig's phase synchronisation falls back to time synchronisation, off the
+    segment, where it finds no phase-synchronised profile)."""
+    length = float(np.linalg.norm(q1 - q0))
+    if length < 1e-12:
+        return JointTrajectory(np.zeros(2), np.vstack([q0, q1]), np.zeros((2, len(q0))), label, np.zeros((2, len(q0))))
+    u = (q1 - q0) / length  # (D,)
+    cap = [float(np.min(lim / np.maximum(np.abs(u), 1e-12))) for lim in (v_max, a_max, j_max)]
+    times, s, sd, sdd = sample_states(ruckig_profile(np.zeros(1), np.array([length]), *(np.array([c]) for c in cap)))
+    q = q0 + s * u  # (T, D): s is (T, 1)
+    q[-1] = q1
+    return JointTrajectory(times, q, sd * u, label, sdd * u)
 
 
 def through_waypoints(waypoints: list[np.ndarray], limits: JointLimits, speed: float = 1.05,
@@ -66,14 +97,16 @@ def through_waypoints(waypoints: list[np.ndarray], limits: JointLimits, speed: f
 
 def concatenate(parts: list[JointTrajectory], label: str = "") -> JointTrajectory:
     """One trajectory of consecutive parts (each starts where the previous one ends, at rest)."""
-    times, q, qd, offset = [], [], [], 0.0
+    times, q, qd, qdd, offset = [], [], [], [], 0.0
     for i, part in enumerate(parts):
         skip = 0 if i == 0 else 1  # the joint sample is shared
         times.append(part.times[skip:] + offset)
         q.append(part.q[skip:])
         qd.append(part.qd[skip:])
+        qdd.append(None if part.qdd is None else part.qdd[skip:])
         offset += part.duration
-    return JointTrajectory(np.concatenate(times), np.concatenate(q), np.concatenate(qd), label)
+    accelerations = None if any(a is None for a in qdd) else np.concatenate(qdd)
+    return JointTrajectory(np.concatenate(times), np.concatenate(q), np.concatenate(qd), label, accelerations)
 
 
 def path_timing(q_path: np.ndarray, length: float, limits: JointLimits, speed: float, acceleration: float,
@@ -108,4 +141,5 @@ def remainder(traj: JointTrajectory, q: np.ndarray, limits: JointLimits, speed: 
 
 def reverse(traj: JointTrajectory) -> JointTrajectory:
     """The same path run backwards (a rest-to-rest profile is time-symmetric)."""
-    return JointTrajectory(traj.times, traj.q[::-1].copy(), -traj.qd[::-1].copy(), traj.label)
+    qdd = None if traj.qdd is None else traj.qdd[::-1].copy()  # d2/dt2 q(T - t) = q''(T - t)
+    return JointTrajectory(traj.times, traj.q[::-1].copy(), -traj.qd[::-1].copy(), traj.label, qdd)
