@@ -64,3 +64,38 @@ def test_the_chosen_plan_travels_no_farther_than_any_other_plan_that_succeeds(ce
     others = every_plan(planner, monkeypatch, T_grasp, T_place)
     assert len(others) >= 4 and max(t for _, t in others) > chosen.travel + 3.0  # some are far
     assert chosen.travel <= min(t for _, t in others) + 1e-6, sorted(others, key=lambda o: o[1])[:3]
+
+
+def test_the_way_home_leaves_out_the_clear_line_only_where_the_direct_motion_clears_the_placed_object(cell):
+    """After the retreat the arm goes straight home when that motion clears the cell and the object as it
+    will stand placed (its observed hull moved from the grasp to the place); with something in the way of
+    that motion it lifts clear first, as before."""
+    from app.motion.planner import OBJECT, PLACED
+    from hardware.se3 import invert, transform_points
+
+    kin, planner = cell
+    scene = planner.scene
+    T_grasp = make_pose(rotvec_to_matrix([np.pi, 0, 0]), [0.5, 0.05, 0.15])
+    T_place = make_pose(rotvec_to_matrix([np.pi, 0, 0]), [0.45, -0.15, 0.15])
+    box = np.stack(np.meshgrid(*[np.linspace(-0.03, 0.03, 4)] * 2, np.linspace(0.0, 0.12, 6)), -1).reshape(-1, 3)
+    scene.add_cloud(OBJECT, box + [0.5, 0.05, 0.0])  # a 6 cm block the grasp holds 3 cm below its top
+    try:
+        q_lift = kin.ik(make_pose(T_grasp[:3, :3], T_grasp[:3, 3] + [0, 0, 0.12]), HOME_Q)
+        plan = planner.place_from(q_lift, T_grasp, T_place, UP)
+        assert [s.label for s in plan.segments] == ["carry", "place", "retreat", "home"]
+        scene.add_cloud(PLACED, transform_points(T_place @ invert(T_grasp), scene.solids[OBJECT]))
+        assert not any(scene.collisions(q, (OBJECT,)) for q in plan.segment("home").q)
+        scene.remove(PLACED)
+        home = plan.segment("home")
+        cube = np.stack(np.meshgrid(*[np.linspace(-0.01, 0.01, 3)] * 3), -1).reshape(-1, 3)
+        ends = (q_lift, plan.segment("place").q[0], plan.segment("retreat").end, HOME_Q)
+        for k in np.linspace(0.2, 0.9, 15) * (len(home.q) - 1):  # a cube where the TCP passes on the way home,
+            scene.add_cloud("post", cube + kin.fk(home.q[int(k)])[:3, 3])  # clear of where the arm stops
+            if not any(scene.collisions(q, (OBJECT,)) for q in ends):
+                break
+        assert scene.collisions(home.q[int(k)], (OBJECT,)) and not any(scene.collisions(q, (OBJECT,)) for q in ends)
+        blocked = planner.place_from(q_lift, T_grasp, T_place, UP)
+        assert [s.label for s in blocked.segments] == ["carry", "place", "retreat", "clear", "home"]
+    finally:
+        for name in (OBJECT, PLACED, "post"):
+            scene.remove(name)

@@ -326,10 +326,10 @@ def _place(job: JobContext, planner: Planner, plan, sent: np.ndarray, again: boo
         _let_go(job, released, held)
     with job.stage("retreat"):
         if short:  # let go off the planned place: the way out is planned from there
-            leave = planner.leave(job.arm.getActualQ(), released, job.t.fixture)
+            leave = planner.leave(job.arm.getActualQ(), released, job.t.fixture, plan.T_base_grasp)
         else:
             back_to_start(job.arm, plan.segment("retreat"), tolerance)  # letting go may have pushed the wrist
-            leave = [plan.segment(name) for name in ("retreat", "clear", "home")]
+            leave = [s for s in plan.segments if s.label in ("retreat", "clear", "home")]
         guarded_leave(job, leave)
     with job.stage("verify"):
         seen = sighting(job.first, job.camera.capture(), job.T_base_cam, sent)

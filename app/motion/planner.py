@@ -10,6 +10,7 @@ Plan (all of it before the arm moves, so an unreachable place fails before the p
     lift -> pre-place         joint transit
     pre-place -> place        straight line along the fixture's approach direction
     place -> retreat          straight line back along the tool's approach axis (the same alternatives)
+    retreat -> home           joint motion, when it clears the cell and the object as placed; else:
     retreat -> clear          straight line up
     clear -> home             joint transit
 
@@ -43,6 +44,7 @@ from hardware.se3 import invert, line_length, make_pose, rotvec_to_matrix, trans
 
 HALF_TURN = make_pose(rotvec_to_matrix([0.0, 0.0, np.pi]))
 OBJECT = "object"  # the planning scene's name for the observed object's hull
+PLACED = "placed"  # the same hull where the object will stand once placed (the way home clears it)
 CARRY_MAY_PIVOT = "carry: no transit keeps the held object from turning about the fingers' axis"
 
 
@@ -298,8 +300,24 @@ class Planner:
         with self.scene.holding(OBJECT, T_grasp), self.scene.fingers(held):  # the carried object must clear the cell too
             carry, kept = self.carry(q_from, place.q[0], (OBJECT,), self.held_lever(T_grasp))
         with self.scene.fingers(released):
+            if direct := self._straight_home(retreat.end, T_grasp, T_place):
+                return [carry, place, retreat, direct], not kept
             back = self.transit(clear.end, home, "home", ignore=(OBJECT,))
         return [carry, place, retreat, clear, back], not kept
+
+    def _straight_home(self, q: np.ndarray, T_grasp: np.ndarray, T_place: np.ndarray) -> JointTrajectory | None:
+        """The direct joint motion home from the retreat's end at q, when it clears the cell and the object
+        as it will stand placed (the observed object's hull moved from the grasp to the place): the clear
+        line up is then left out. None when it does not, or without an observed object (nothing to clear)."""
+        solid = self.scene.solids.get(OBJECT)
+        if solid is None:
+            return None
+        self.scene.add_cloud(PLACED, transform_points(T_place @ invert(T_grasp), solid))
+        try:
+            home = self._timed(np.array([q, self.config.home_q]), "home")
+            return None if self._collisions(home, (OBJECT,)) else home
+        finally:
+            self.scene.remove(PLACED)
 
     def _retreat_and_clear(self, q: np.ndarray, T_place: np.ndarray,
                            touching: tuple[str, ...] = ()) -> tuple[JointTrajectory, JointTrajectory]:
@@ -317,17 +335,20 @@ class Planner:
 
         return first_that_works([T_place @ make_pose(t=back) for back in backs], retreat_and_clear)
 
-    def leave(self, q: np.ndarray, released: float, fixture: str) -> list[JointTrajectory]:
+    def leave(self, q: np.ndarray, released: float, fixture: str, T_grasp: np.ndarray | None = None) -> list[JointTrajectory]:
         """retreat, clear, home from where the object was let go at q (the fingers `released` m apart),
         planned there and then: a place line that a contact cut short ends off its planned place, the
         fingers maybe on the `fixture` it met (then the retreat may start on it: mug 31's finger was
-        within the scene's margin of the rack)."""
+        within the scene's margin of the rack). With the grasp `T_grasp` the object was held at, the
+        retreat goes straight home where that clears the object let go here (`_straight_home`)."""
         T = self.kin.fk(q)
         with self.scene.fingers(released):
             try:
                 retreat, clear = self._retreat_and_clear(q, T)
             except PlanningFailure:
                 retreat, clear = self._retreat_and_clear(q, T, touching=(fixture,))
+            if T_grasp is not None and (direct := self._straight_home(retreat.end, T_grasp, T)):
+                return [retreat, direct]
             return [retreat, clear, self.transit(clear.end, np.asarray(self.config.home_q), "home", ignore=(OBJECT,))]
 
     def _first_line(self, q: np.ndarray, targets: list[np.ndarray], label: str,
