@@ -41,7 +41,7 @@ from app.jobs.hold import holding, object_axis, on_object
 from app.jobs.log import JobLog, LoggedCamera
 from app.jobs.motion_meter import MeteredArm
 from app.jobs.record import STAGES, JobHooks, JobResult, check_held, ur
-from app.jobs.settings import JobConfig, looks_again
+from app.jobs.settings import JobConfig, is_hang, looks_again
 from app.motion.executor import back_to_start, execute, motion_failure
 from app.motion.ik import reach_failure
 from app.motion.planner import OBJECT, FingerWidths, Planner
@@ -129,7 +129,7 @@ def run_job(t: Task, arm: Arm, gripper: Gripper, camera: DepthCamera, T_base_cam
 def _run(job: JobContext) -> None:
     if job.log.active:
         job.log.fixtures(job.fixture_meshes)
-    planner = Planner(job.kin, job.arm.joint_limits, job.scene, job.config.motion)
+    planner = Planner(job.kin, job.arm.joint_limits, job.scene, job.config.motion, object_stays=not is_hang(job.t))
     options, seen, slips = None, None, []
     for attempt in range(1, job.config.attempts + 1):
         last = attempt == job.config.attempts

@@ -91,8 +91,11 @@ class Planner:
     """Plans joint transits and straight lines for the cell's UR5 against a planning scene."""
 
     def __init__(self, kin: UR5Kinematics, limits: JointLimits, scene: PlanningScene,
-                 config: MotionConfig = MotionConfig()) -> None:
+                 config: MotionConfig = MotionConfig(), object_stays: bool = True) -> None:
+        """`object_stays`: a placed object stays where it is let go (set down on a support), so the way home
+        may be planned around it; False for one hung on a peg, which swings once let go."""
         self.kin, self.limits, self.scene, self.config = kin, limits, scene, config
+        self.object_stays = object_stays
 
     def transit(self, q0: np.ndarray, q1: np.ndarray, label: str, ignore: tuple[str, ...] = (),
                 allowed: Callable[[np.ndarray], bool] | None = None,
@@ -308,9 +311,10 @@ class Planner:
     def _straight_home(self, q: np.ndarray, T_grasp: np.ndarray, T_place: np.ndarray) -> JointTrajectory | None:
         """The direct joint motion home from the retreat's end at q, when it clears the cell and the object
         as it will stand placed (the observed object's hull moved from the grasp to the place): the clear
-        line up is then left out. None when it does not, or without an observed object (nothing to clear)."""
+        line up is then left out. None when it does not, without an observed object (nothing to clear), or
+        for an object that does not stay where it is let go (`object_stays`)."""
         solid = self.scene.solids.get(OBJECT)
-        if solid is None:
+        if solid is None or not self.object_stays:
             return None
         self.scene.add_cloud(PLACED, transform_points(T_place @ invert(T_grasp), solid))
         try:
