@@ -479,7 +479,7 @@ def test_a_blocked_lift_is_replaced_by_one_tilted_off_vertical(kin, limits, scen
 
 def test_line_alternatives_are_the_axis_shorter_and_a_cone_of_six_about_it():
     from app.motion.config import MotionConfig
-    from app.motion.planner import line_offsets
+    from app.motion.line_offsets import line_offsets
 
     axis = np.array([0.3, -0.5, 0.8]) / np.linalg.norm([0.3, -0.5, 0.8])
     offsets = np.array(line_offsets(axis, 0.1, MotionConfig()))  # (9, 3)
@@ -604,7 +604,7 @@ def _side_grasp(kin):
 
 
 def test_the_carry_constraint_bounds_the_turn_about_the_fingers_axis_and_no_other(kin):
-    from app.motion.planner import held_without_pivot
+    from app.motion.carry_pivot import held_without_pivot
 
     T0, q0 = _side_grasp(kin)
     turned = lambda rotvec: kin.ik(T0 @ make_pose(rotvec_to_matrix(rotvec)), q0)  # noqa: E731

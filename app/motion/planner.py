@@ -32,9 +32,11 @@ import numpy as np
 
 from app.failures import NoPath, PathCollides, PlanningFailure
 from app.motion.blend import blend_checked
+from app.motion.carry_pivot import held_without_pivot
 from app.motion.cartesian import line_path
 from app.motion.config import MotionConfig
 from app.motion.ik import joint_distance, solutions
+from app.motion.line_offsets import approach_offsets, line_offsets
 from app.motion.sampling import SamplingConfig, densify, plan_joint_path
 from app.motion.scene import PlanningScene
 from app.motion.trajectory import JointTrajectory, path_timing, reverse, through_waypoints
@@ -375,36 +377,6 @@ class Planner:
         return []
 
 
-def held_without_pivot(kin: UR5Kinematics, q0: np.ndarray, q1: np.ndarray, extra: float) -> Callable[[np.ndarray], bool]:
-    """The carry's path constraint. A two-finger grip resists turns about every axis but the fingers'
-    own (the tool's y), where only the pads' torsional friction holds the object, so gravity may swing
-    about that axis, seen from the tool, at most as far as `extra` degrees (or as far as q1 needs); an
-    object turned on its head over the fingers (swing 2) is refused too, balanced as it may be:
-
-        g(q) = R(q)^T (0, 0, -1)                   gravity in the tool frame
-        p(q) = g(q) - (g(q) . y) y                 its part across the fingers' axis
-        swing(q) = | p(q) - |p(q)| p(q0) / |p(q0)| |   = |p(q)| 2 sin(theta / 2), theta its turn about y
-        swing(q) <= max(swing(q1), 2 sin(extra / 2))
-    """
-    down, y = np.array([0.0, 0.0, -1.0]), np.array([0.0, 1.0, 0.0])
-
-    def across(q: np.ndarray) -> np.ndarray:
-        g = kin.fk(q)[:3, :3].T @ down  # (3,)
-        return g - (g @ y) * y
-
-    p0 = across(q0)
-    if np.linalg.norm(p0) < 1e-3:  # the fingers' axis vertical: gravity cannot pivot the object
-        return lambda q: True
-    p0 = p0 / np.linalg.norm(p0)
-
-    def swing(q: np.ndarray) -> float:
-        p = across(q)
-        return float(np.linalg.norm(p - np.linalg.norm(p) * p0))
-
-    limit = max(swing(q1), 2.0 * np.sin(np.radians(extra) / 2.0)) + 1e-9
-    return lambda q: bool(swing(q) <= limit)
-
-
 def travel(q0: np.ndarray, q1: np.ndarray) -> float:
     """Joint travel (rad) of a straight joint motion: the joints' distances summed."""
     return float(np.abs(np.asarray(q1) - np.asarray(q0)).sum())
@@ -435,25 +407,3 @@ def first_that_works(items: list, attempt):
         except PlanningFailure as exc:
             errors.append(exc)
     raise errors[0]
-
-
-def line_offsets(axis: np.ndarray, distance: float, config: MotionConfig) -> list[np.ndarray]:
-    """Where a straight line may end (3,), relative to where it starts, `distance` along the unit `axis`
-    first, then the alternatives that keep the task: the same axis at `shorter` fractions of the
-    distance, and directions `approach_cone` off the axis at 6 azimuths."""
-    axis = np.asarray(axis, float) / np.linalg.norm(axis)
-    offsets = [axis * distance * k for k in (1.0, *config.shorter)]
-    tilt = np.radians(config.approach_cone)
-    e1 = np.cross(axis, [0.0, -1.0, 0.0] if abs(axis[1]) < 0.9 else [-1.0, 0.0, 0.0])
-    e1 /= np.linalg.norm(e1)
-    e2 = np.cross(axis, e1)  # (e1, e2) span the plane across the axis (e1 = -x for the tool's -z)
-    for azimuth in np.arange(6 if tilt > 0 else 0) * np.pi / 3:
-        across = np.cos(azimuth) * e1 - np.sin(azimuth) * e2
-        offsets.append(distance * (np.cos(tilt) * axis + np.sin(tilt) * across))
-    return offsets
-
-
-def approach_offsets(config: MotionConfig) -> list[np.ndarray]:
-    """Pre-grasp positions (3,) in the grasp's TCP frame: `approach_distance` back along the tool axis,
-    then the alternatives (`line_offsets`); the grasp pose itself is unchanged."""
-    return line_offsets(np.array([0.0, 0.0, -1.0]), config.approach_distance, config)
