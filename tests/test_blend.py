@@ -116,3 +116,27 @@ def test_a_blended_transit_around_an_obstacle_is_free_at_every_sample_and_quicke
         assert traj.duration <= stops._timed(seen[0], "around").duration + 1e-9
     finally:
         scene.close()
+
+
+def test_a_straight_segment_stays_on_it_where_ruckigs_phase_synchronisation_falls_back(limits):
+    """A rest-to-rest motion asked to be straight: Ruckig's phase synchronisation finds no such profile for
+    these two configurations and leaves the segment by 0.036 rad; `joint_segment(straight=True)` keeps to
+    it exactly (a 1-D profile along it), in the same time, within the limits."""
+    from app.motion.trajectory import joint_segment, sample_states
+    from hardware.motion_profile import ruckig_profile
+
+    q0 = np.array([0.066, -0.017, -1.538, 1.952, -0.4, 2.073])
+    q1 = np.array([0.019, 0.867, -1.616, 2.006, -1.36, 1.545])
+    d = q1 - q0
+
+    def off(q: np.ndarray) -> float:
+        s = (q - q0) @ d / (d @ d)  # (T,)
+        return float(np.abs(q0 + s[:, None] * d - q).max())
+
+    v, a = np.minimum(SPEED, limits.velocity), np.minimum(ACCELERATION, limits.acceleration)
+    ruckig = ruckig_profile(q0, q1, v, a, limits.jerk, straight=True)
+    assert off(sample_states(ruckig)[1]) > 0.03  # the case is real
+    traj = joint_segment(q0, q1, limits, SPEED, ACCELERATION, straight=True)
+    assert off(traj.q) < 1e-9 and np.allclose(traj.q[[0, -1]], [q0, q1], atol=1e-12)
+    assert abs(traj.duration - ruckig.duration) < 0.05
+    assert_within_limits(traj, limits)
