@@ -122,8 +122,9 @@ def test_a_straight_segment_stays_on_it_where_ruckigs_phase_synchronisation_fall
     """A rest-to-rest motion asked to be straight: Ruckig's phase synchronisation finds no such profile for
     these two configurations and leaves the segment by 0.036 rad; `joint_segment(straight=True)` keeps to
     it exactly (a 1-D profile along it), in the same time, within the limits."""
+    from ruckig import InputParameter, Ruckig, Synchronization, Trajectory
+
     from app.motion.trajectory import joint_segment, sample_states
-    from hardware.motion_profile import ruckig_profile
 
     q0 = np.array([0.066, -0.017, -1.538, 1.952, -0.4, 2.073])
     q1 = np.array([0.019, 0.867, -1.616, 2.006, -1.36, 1.545])
@@ -134,7 +135,12 @@ def test_a_straight_segment_stays_on_it_where_ruckigs_phase_synchronisation_fall
         return float(np.abs(q0 + s[:, None] * d - q).max())
 
     v, a = np.minimum(SPEED, limits.velocity), np.minimum(ACCELERATION, limits.acceleration)
-    ruckig = ruckig_profile(q0, q1, v, a, limits.jerk, straight=True)
+    inp = InputParameter(6)  # Ruckig asked for phase synchronisation, at rest at both ends
+    inp.current_position, inp.target_position = list(q0), list(q1)
+    inp.max_velocity, inp.max_acceleration, inp.max_jerk = list(v), list(a), list(limits.jerk)
+    inp.synchronization = Synchronization.Phase
+    ruckig = Trajectory(6)
+    Ruckig(6).calculate(inp, ruckig)
     assert off(sample_states(ruckig)[1]) > 0.03  # the case is real
     traj = joint_segment(q0, q1, limits, SPEED, ACCELERATION, straight=True)
     assert off(traj.q) < 1e-9 and np.allclose(traj.q[[0, -1]], [q0, q1], atol=1e-12)

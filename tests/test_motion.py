@@ -687,7 +687,7 @@ def test_a_carry_that_may_pivot_the_object_sends_the_planner_to_the_other_half_t
     T_grasp = make_pose(rotvec_to_matrix([np.pi, 0, 0]), [0.5, 0.05, 0.15])
     T_place = make_pose(rotvec_to_matrix([np.pi, 0, 0]), [0.45, -0.15, 0.15])
     planner = Planner(kin, limits, scene)
-    flips = planner._flips_nearest_first(HOME_Q, T_grasp)
+    flips = planner._flips_shortest_first(HOME_Q, T_grasp)
     carries = iter(pivots_on)
     carry = Planner.carry
     monkeypatch.setattr(Planner, "carry", lambda self, *a, **k: (carry(self, *a, **k)[0], not next(carries)))
@@ -728,14 +728,14 @@ def test_an_object_held_near_its_centroid_gets_a_short_search_for_a_carry_that_k
 
 
 def test_a_transit_is_collision_checked_as_densely_at_any_speed():
-    """checked_samples keeps a sample wherever a joint has moved more than the step since the last kept
+    """checked_indices keeps a sample wherever a joint has moved more than the step since the last kept
     one: a path sampled four times as finely gives the same checked states."""
-    from app.motion.planner import checked_samples
+    from app.motion.planner import checked_indices
 
     coarse = np.zeros((41, 6))
     coarse[:, 0] = np.linspace(0.0, 1.0, 41)  # 0.025 rad per sample
     fine = np.zeros((161, 6))
     fine[:, 0] = np.linspace(0.0, 1.0, 161)  # 0.00625 rad per sample
-    a, b = checked_samples(coarse, 0.02), checked_samples(fine, 0.02)
+    a, b = coarse[checked_indices(coarse, 0.02)], fine[checked_indices(fine, 0.02)]
     assert np.abs(np.diff(a[:, 0])).max() <= 0.025 + 1e-12 and np.abs(np.diff(b[:, 0])).max() <= 0.025 + 1e-12
     assert abs(len(a) - len(b)) <= 8 and len(b) >= 1.0 / 0.025

@@ -23,7 +23,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from app.motion.trajectory import JointTrajectory, concatenate, sample_states, straight_segment
+from app.motion.trajectory import JointTrajectory, concatenate, sample_states, straight_duration, straight_segment
 from hardware.interfaces import JointLimits
 from hardware.motion_profile import ruckig_profile
 
@@ -50,7 +50,7 @@ def blended(waypoints: np.ndarray, limits: JointLimits, speed: float, accelerati
     (`via_velocities`), those in `rest` at rest on the straight segments; and the time (K,) it passes each."""
     waypoints = np.asarray(waypoints, float)
     v_max, a_max = np.minimum(speed, limits.velocity), np.minimum(acceleration, limits.acceleration)
-    straight = [straight_segment(a, b, v_max, a_max, limits.jerk).duration for a, b in zip(waypoints[:-1], waypoints[1:])]
+    straight = [straight_duration(a, b, v_max, a_max, limits.jerk) for a, b in zip(waypoints[:-1], waypoints[1:])]
     v = via_velocities(waypoints, np.array(straight), v_max, rest)
     parts = []
     for i in range(len(waypoints) - 1):

@@ -162,14 +162,9 @@ class Planner:
     def _blended(self, waypoints: np.ndarray, label: str, profile: tuple[float, float], ignore: tuple[str, ...],
                  allowed: Callable[[np.ndarray], bool] | None) -> JointTrajectory:
         """The sampled path's waypoints passed without stopping where the blend stays free (`blend_checked`)."""
-        c = self.config
-
         def first_bad(traj: JointTrajectory) -> float | None:
-            for k in [*checked_indices(traj.q, c.check_step), len(traj.q) - 1]:
-                q = traj.q[k]
-                if not self.limits.contains(q) or self.scene.collisions(q, ignore) or (allowed and not allowed(q)):
-                    return float(traj.times[k])
-            return None
+            hit = self._first_hit(traj, ignore, allowed, limits=True)
+            return None if hit is None else float(traj.times[hit[0]])
 
         return blend_checked(waypoints, self.limits, *profile, label, first_bad)
 
@@ -203,7 +198,7 @@ class Planner:
         widths = widths or FingerWidths.fully_open(self.scene.geometry.stroke)
         errors: list[PlanningFailure] = []
         plans = []  # a plan whose carry may pivot the object is kept while the other half-turn is tried
-        for flip in self._flips_nearest_first(q_start, T_base_grasp, T_base_place):
+        for flip in self._flips_shortest_first(q_start, T_base_grasp, T_base_place):
             try:
                 T_place = None if T_base_place is None else T_base_place @ flip
                 plans.append(self._pick_place(q_start, T_base_grasp @ flip, T_place, place_direction, widths))
@@ -218,7 +213,7 @@ class Planner:
             return plan
         raise type(errors[0])(" / ".join(dict.fromkeys(str(e) for e in errors)))  # the first half-turn's kind
 
-    def _flips_nearest_first(self, q_start: np.ndarray, T_base_grasp: np.ndarray,
+    def _flips_shortest_first(self, q_start: np.ndarray, T_base_grasp: np.ndarray,
                              T_base_place: np.ndarray | None = None) -> list[np.ndarray]:
         """The grasp and its half-turn, the one with the shortest job first (`_round_trip` over its IK
         branches; without a place, the branch nearest q_start): the other is planned only if the first cannot be."""
@@ -265,9 +260,12 @@ class Planner:
         """The joint travel (rad, summed over the joints) of a job through the grasp's IK branch q_grasp: from
         q_start to it, on to the place's branch that makes the rest shortest, and home - an estimate, the
         transits taken as straight and the lines left out."""
-        home = np.asarray(self.config.home_q)
-        rest = [travel(q_grasp, q) + travel(q, home) for q in self.kin.ik_all(T_place, q_grasp)]
+        rest = [self._onward(q_grasp, q) for q in self.kin.ik_all(T_place, q_grasp)]
         return travel(q_start, q_grasp) + min(rest, default=0.0)
+
+    def _onward(self, q_from: np.ndarray, q_place: np.ndarray) -> float:
+        """The joint travel (rad) from q_from to the place's branch q_place and from there home, as straight motions."""
+        return travel(q_from, q_place) + travel(q_place, np.asarray(self.config.home_q))
 
     def place_from(self, q_now: np.ndarray, T_base_grasp: np.ndarray, T_base_place: np.ndarray,
                    place_direction: np.ndarray, widths: FingerWidths | None = None) -> PickPlacePlan:
@@ -294,8 +292,7 @@ class Planner:
 
         with self.scene.fingers(held):
             at_place = solutions(self.kin, T_place, q_from, self.scene, c.ik, (OBJECT,), "place")
-        home = np.asarray(c.home_q)
-        at_place.sort(key=lambda q: travel(q_from, q) + travel(q, home))  # the carry and the way home, shortest first
+        at_place.sort(key=lambda q: self._onward(q_from, q))  # the carry and the way home, shortest first
         for distance in c.place_distances:  # farther out when the held hull meets the fixture at the pre-place
             T_pre_place = make_pose(T_place[:3, :3], T_place[:3, 3] + distance * np.asarray(place_direction))
             place, retreat, clear = self._first(at_place, lambda q: place_lines(q, T_pre_place))
@@ -305,10 +302,15 @@ class Planner:
         with self.scene.holding(OBJECT, T_grasp), self.scene.fingers(held):  # the carried object must clear the cell too
             carry, kept = self.carry(q_from, place.q[0], (OBJECT,), self.held_lever(T_grasp))
         with self.scene.fingers(released):
-            if direct := self._straight_home(retreat.end, T_grasp, T_place):
-                return [carry, place, retreat, direct], not kept
-            back = self.transit(clear.end, home, "home", ignore=(OBJECT,))
-        return [carry, place, retreat, clear, back], not kept
+            return [carry, place, *self._way_home(retreat, clear, T_grasp, T_place)], not kept
+
+    def _way_home(self, retreat: JointTrajectory, clear: JointTrajectory, T_grasp: np.ndarray | None,
+                  T_place: np.ndarray) -> list[JointTrajectory]:
+        """retreat, then straight home where that clears the object placed at T_place (`_straight_home`),
+        else clear and the transit home (the fingers as they are set)."""
+        if T_grasp is not None and (direct := self._straight_home(retreat.end, T_grasp, T_place)):
+            return [retreat, direct]
+        return [retreat, clear, self.transit(clear.end, np.asarray(self.config.home_q), "home", ignore=(OBJECT,))]
 
     def _straight_home(self, q: np.ndarray, T_grasp: np.ndarray, T_place: np.ndarray) -> JointTrajectory | None:
         """The direct joint motion home from the retreat's end at q, when it clears the cell and the object
@@ -353,9 +355,7 @@ class Planner:
                 retreat, clear = self._retreat_and_clear(q, T)
             except PlanningFailure:
                 retreat, clear = self._retreat_and_clear(q, T, touching=(fixture,))
-            if T_grasp is not None and (direct := self._straight_home(retreat.end, T_grasp, T)):
-                return [retreat, direct]
-            return [retreat, clear, self.transit(clear.end, np.asarray(self.config.home_q), "home", ignore=(OBJECT,))]
+            return self._way_home(retreat, clear, T_grasp, T)
 
     def _first_line(self, q: np.ndarray, targets: list[np.ndarray], label: str,
                     gentle: bool = False) -> JointTrajectory:
@@ -369,22 +369,29 @@ class Planner:
     def _collisions(self, traj: JointTrajectory, ignore: tuple[str, ...],
                     allowed: Callable[[np.ndarray], bool] | None = None) -> list[str]:
         """What the timed motion hits (or 'path constraint' where `allowed` refuses a state); [] if nothing."""
-        for q in [*checked_samples(traj.q, self.config.check_step), traj.end]:
+        hit = self._first_hit(traj, ignore, allowed)
+        return [] if hit is None else hit[1]
+
+    def _first_hit(self, traj: JointTrajectory, ignore: tuple[str, ...],
+                   allowed: Callable[[np.ndarray], bool] | None = None,
+                   limits: bool = False) -> tuple[int, list[str]] | None:
+        """The first checked sample (`checked_indices`, and the end) where the timed motion fails, and what
+        it hits there ('path constraint' where `allowed` refuses it; 'joint limits' outside them, when
+        `limits`); None when it fails nowhere."""
+        for k in [*checked_indices(traj.q, self.config.check_step), len(traj.q) - 1]:
+            q = traj.q[k]
+            if limits and not self.limits.contains(q):
+                return k, ["joint limits"]
             if hits := self.scene.collisions(q, ignore):
-                return hits
+                return k, hits
             if allowed is not None and not allowed(q):
-                return ["path constraint"]
-        return []
+                return k, ["path constraint"]
+        return None
 
 
 def travel(q0: np.ndarray, q1: np.ndarray) -> float:
     """Joint travel (rad) of a straight joint motion: the joints' distances summed."""
     return float(np.abs(np.asarray(q1) - np.asarray(q0)).sum())
-
-
-def checked_samples(q: np.ndarray, step: float) -> np.ndarray:
-    """The samples of a joint path (K, 6) to collision-check (`checked_indices`)."""
-    return q[checked_indices(q, step)]
 
 
 def checked_indices(q: np.ndarray, step: float) -> list[int]:

@@ -1,8 +1,9 @@
 """Joint trajectories: Ruckig rest-to-rest segments chained through waypoints, sampled for execution.
 
 The free Ruckig computes state-to-state motions only (its intermediate-waypoint feature calls a
-remote service and is never used here), so a path through waypoints is a chain of time-optimal,
-jerk-limited rest-to-rest segments - each segment is optimal, the chain stops at every waypoint.
+remote service and is never used here), so a path through waypoints here is a chain of time-optimal,
+jerk-limited rest-to-rest segments - each segment is optimal, the chain stops at every waypoint (one
+that does not stop: `app.motion.blend`).
 """
 from __future__ import annotations
 
@@ -73,15 +74,32 @@ def straight_segment(q0: np.ndarray, q1: np.ndarray, v_max: np.ndarray, a_max: n
 
     exactly on the segment (Ruckig's phase synchronisation falls back to time synchronisation, off the
     segment, where it finds no phase-synchronised profile)."""
-    length = float(np.linalg.norm(q1 - q0))
-    if length < 1e-12:
+    along = _along_segment(q0, q1, v_max, a_max, j_max)
+    if along is None:
         return JointTrajectory(np.zeros(2), np.vstack([q0, q1]), np.zeros((2, len(q0))), label, np.zeros((2, len(q0))))
-    u = (q1 - q0) / length  # (D,)
-    cap = [float(np.min(lim / np.maximum(np.abs(u), 1e-12))) for lim in (v_max, a_max, j_max)]
-    times, s, sd, sdd = sample_states(ruckig_profile(np.zeros(1), np.array([length]), *(np.array([c]) for c in cap)))
+    u, profile = along
+    times, s, sd, sdd = sample_states(profile)
     q = q0 + s * u  # (T, D): s is (T, 1)
     q[-1] = q1
     return JointTrajectory(times, q, sd * u, label, sdd * u)
+
+
+def straight_duration(q0: np.ndarray, q1: np.ndarray, v_max: np.ndarray, a_max: np.ndarray, j_max: np.ndarray) -> float:
+    """The duration (s) of `straight_segment`, without sampling it."""
+    along = _along_segment(q0, q1, v_max, a_max, j_max)
+    return 0.0 if along is None else float(along[1].duration)
+
+
+def _along_segment(q0: np.ndarray, q1: np.ndarray, v_max: np.ndarray, a_max: np.ndarray,
+                   j_max: np.ndarray) -> tuple[np.ndarray, Trajectory] | None:
+    """The unit direction u (D,) of q0 -> q1 and the 1-D profile of s along it (`straight_segment`); None
+    for a segment of no length."""
+    length = float(np.linalg.norm(q1 - q0))
+    if length < 1e-12:
+        return None
+    u = (q1 - q0) / length  # (D,)
+    cap = [float(np.min(lim / np.maximum(np.abs(u), 1e-12))) for lim in (v_max, a_max, j_max)]
+    return u, ruckig_profile(np.zeros(1), np.array([length]), *(np.array([c]) for c in cap))
 
 
 def through_waypoints(waypoints: list[np.ndarray], limits: JointLimits, speed: float = 1.05,
