@@ -12,9 +12,9 @@ import psutil
 import pytest
 from ray import cloudpickle
 
-from app.fanout.cluster import ClusterConfig, ClusterError, check_reachable, started
+from app.fanout.cluster import ClusterConfig, ClusterError, check_reachable, started, warmed
 from app.fanout.guard import is_ray
-from app.fanout.run import in_process, on_ray
+from app.fanout.run import fan_out, in_process, on_ray
 from app.fanout.shipping import landed, pack
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -62,6 +62,31 @@ def test_ray_gives_what_this_process_gives_retries_killed_workers_and_recycles_t
     assert there == here and here[3] == "ValueError: three is refused" and here[5] == 35
     assert survived == items and sorted(int(p.name) for p in tmp_path.iterdir()) == [0, 2, 4, 6]  # each died once
     assert len(set(pids)) == 4  # recycled after every task: a fresh process each time
+
+
+def slow_pid(state, item: int) -> tuple[int, int]:
+    if item == 23:
+        raise ValueError("the last is refused")
+    time.sleep(0.4)
+    return item, os.getpid()
+
+
+def test_the_command_works_while_ray_starts_and_hands_the_rest_to_its_workers():
+    items = list(range(24))
+    outcomes = list(fan_out(slow_pid, items, same, None, ClusterConfig(2), helps=True))
+    assert sorted(o.index for o in outcomes) == items  # each item once
+    assert [o.error for o in outcomes if o.failed] == ["ValueError: the last is refused"]
+    ran = {o.index: o.value[1] for o in outcomes if not o.failed}
+    here = sorted(i for i, pid in ran.items() if pid == os.getpid())
+    assert all(o.value[0] == o.index for o in outcomes if not o.failed)
+    assert here and here == list(range(len(here)))  # this process took the first items, in order, while Ray started
+    assert len(set(ran.values()) - {os.getpid()}) >= 1 and len(here) < len(ran)  # Ray's workers took the rest
+    with warmed(ClusterConfig(2)) as ready:
+        ready.startup.join()  # Ray up before the work: every item goes to its workers
+        pids = {o.value[1] for o in fan_out(slow_pid, [0, 1, 2], same, None, ready, helps=True)}
+    unhelped = {o.value[1] for o in fan_out(slow_pid, [0, 1, 2], same, None, ClusterConfig(2))}
+    assert os.getpid() not in pids | unhelped
+    assert not [p for p in psutil.Process().children(recursive=True) if is_ray(p)]  # Ray shut down after each
 
 
 def test_a_parcel_lands_once_with_the_same_bytes(tmp_path):

@@ -1,5 +1,5 @@
 """The verbs that fan out, on a real Ray: two local workers write what one process writes (make-data,
-bench-jobs; bench in tests/test_bench.py), and a two-node cluster on this machine runs a bench through
+bench-jobs, bench-imitation; bench in tests/test_bench.py), and a two-node cluster on this machine runs a bench through
 --address, the demos shipped to it through the object store."""
 import json
 
@@ -7,7 +7,9 @@ import numpy as np
 import psutil
 import pytest
 
+from app.bench.imitation import run_imitation_benchmark
 from app.cli import main
+from app.fanout.cluster import ClusterConfig, warmed
 from app.fanout.guard import is_ray
 from app.training.data import DataConfig, make_dataset
 
@@ -28,7 +30,9 @@ def timeless(value):
 def test_make_data_on_two_workers_writes_the_bytes_one_process_writes(tmp_path):
     config = DataConfig(instances=2, views=2, queries=200, shard_instances=1, seed=5)
     one = make_dataset(config, tmp_path / "one", workers=1, progress=False)
-    two = make_dataset(config, tmp_path / "two", workers=2, progress=False)
+    with warmed(ClusterConfig(2)) as ready:
+        ready.startup.join()  # Ray up first: its workers make every shard (the command would make these few itself)
+        two = make_dataset(config, tmp_path / "two", workers=ready, progress=False)
     assert one.manifest["complete"] and two.manifest["complete"] and len(one.manifest["shards"]) == 6
     for shard in one.manifest["shards"]:
         a, b = np.load(tmp_path / "one" / shard["file"]), np.load(tmp_path / "two" / shard["file"])
@@ -45,6 +49,16 @@ def test_bench_jobs_on_two_workers_records_what_one_process_records(tmp_path, tr
     one, two = (json.loads(records[w].read_text()) for w in (1, 2))
     assert [r["seed"] for r in one] == [0, 1] and all(r["success"] for r in one)
     assert timeless(two) == timeless(one)
+
+
+def test_bench_imitation_on_two_workers_measures_what_one_process_measures():
+    one = run_imitation_benchmark(quick=True, tasks=("bowl", "bottle"), schedule="cell")
+    two = run_imitation_benchmark(quick=True, tasks=("bowl", "bottle"), schedule="cell", cluster=ClusterConfig(2))
+    timed = ("seconds_per_prediction", "seconds_per_template", "workers")
+    assert one["workers"] == 1 and two["workers"] == 2 and one["bowl_failed"] == two["bottle_failed"] == 0
+    assert {k: v for k, v in one.items() if not k.endswith(timed)} == {k: v for k, v in two.items()
+                                                                       if not k.endswith(timed)}
+    assert one["bowl_grasp_error_mm"] < 50  # a prediction, not an empty row
 
 
 def test_a_two_node_cluster_runs_a_bench_through_its_address_and_another_ray_is_refused(tmp_path, monkeypatch):

@@ -13,11 +13,13 @@ height error and its tilt; on the rack it is the full pose error.
 from __future__ import annotations
 
 import time
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 import torch
 
+from app.fanout.cluster import ClusterConfig
+from app.fanout.run import fan_out
 from app.nift.imitate import ImitationConfig
 from app.nift.raycast import scene_of
 from app.objects import split
@@ -80,48 +82,104 @@ def schedule_settings(schedule: str, method: str, seed: int, config: ImitationCo
     return PredictConfig(method=method, imitation=replace(config, seed=seed), center=False, carried_grasps=False)
 
 
+@dataclass(frozen=True)
+class Case:
+    """One prediction to measure: a test object of a task, drawn from its own seed (whatever runs it)."""
+
+    task: str
+    object_seed: int
+    draw: tuple[int, ...]  # the random draws' seed: scale, pose, camera noise, resampling
+
+
+@dataclass(frozen=True)
+class Measured:
+    """A prediction's wall seconds, grasp and place errors (m, deg), iterations, seconds per template."""
+
+    row: tuple[float, ...]
+    per_template: tuple[float, ...]
+
+
+def cases(tasks: tuple[str, ...], n: int, seed: int) -> list[Case]:
+    """`n` unseen test objects per task, each with seeds of its own."""
+    out = []
+    for name in tasks:
+        picks = np.random.default_rng([seed, len(name)]).choice(split(task(name).category, "test"), size=n,
+                                                                 replace=False)
+        out += [Case(name, int(s), (seed, len(name), k)) for k, s in enumerate(picks)]
+    return out
+
+
+def measure(settings: PredictConfig, case: Case) -> Measured:
+    """Time one whole `predict` on the case's object and score it against the teacher."""
+    cell, t = CellConfig(), task(case.task)
+    mesh, T_base_obj, cloud, scale = target(t.category, case.object_seed, np.random.default_rng(case.draw), cell)
+    start = time.perf_counter()
+    pred = predict(t, cloud, settings, cell.fixture_pose(t.fixture))
+    wall = time.perf_counter() - start
+    g = grasp_error(t.category, T_base_obj, pred.T_base_tcp, T_base_obj @ teacher_grasp(mesh))
+    goal = cell.fixture_pose(t.fixture) @ teacher_place(t, mesh, scale)
+    p = place_error(t.fixture, pred.motion @ T_base_obj, goal)
+    return Measured((wall, *g, *p, *pred.iterations.values()), tuple(pred.seconds.values()))
+
+
+def _settings(payload: tuple[PredictConfig, int]) -> PredictConfig:
+    """A worker's state: the settings, on the schedule's torch threads (a job's for "cell")."""
+    from app.nift.imitate import use_threads
+
+    settings, threads = payload
+    use_threads(threads)
+    return settings
+
+
+def _figures(name: str, measured: list[Measured]) -> dict:
+    """A task's medians: seconds per prediction and per template, errors, iterations."""
+    a = np.array([m.row for m in measured], dtype=float)
+    med = np.median(a, axis=0)
+    figures = {
+        f"{name}_seconds_per_prediction": round(float(med[0]), 2),  # the whole predict: grasp, place, refinements
+        f"{name}_seconds_per_template": round(float(np.median([s for m in measured for s in m.per_template])), 2),
+        f"{name}_grasp_error_mm": round(1000 * float(med[1]), 1),
+        f"{name}_grasp_error_deg": round(float(med[2]), 1),
+        f"{name}_place_error_mm": round(1000 * float(med[3]), 1),
+        f"{name}_place_error_deg": round(float(med[4]), 1),
+    }
+    if a.shape[1] > 5:
+        figures[f"{name}_iterations"] = [int(v) for v in med[5:]]
+    return figures
+
+
 def run_imitation_benchmark(quick: bool = False, seed: int = 0, method: str = "nift", objects: int = 20,
                             tasks: tuple[str, ...] = ("mug", "bowl", "bottle"),
-                            config: ImitationConfig = ImitationConfig(), schedule: str = "teleported") -> dict:
+                            config: ImitationConfig = ImitationConfig(), schedule: str = "teleported",
+                            cluster: ClusterConfig = ClusterConfig(1)) -> dict:
     """Per task: median wall seconds per prediction (the whole `predict`), iterations, and median
-    grasp / place errors, under `schedule` (`schedule_settings`)."""
-    cell = CellConfig()
-    settings = schedule_settings(schedule, method, seed, config)
-    if schedule == "cell":  # a job's threads too (`JobConfig.threads`)
-        from app.jobs.settings import JobConfig
-        from app.nift.imitate import use_threads
+    grasp / place errors, under `schedule` (`schedule_settings`); the predictions fan out on
+    `cluster` (one at a time by default, so the seconds are a cell's)."""
+    from app.jobs.settings import JobConfig
 
-        use_threads(JobConfig().threads)
+    settings = schedule_settings(schedule, method, seed, config)
+    threads = JobConfig().threads if schedule == "cell" else torch.get_num_threads()
+    if not (cluster.local and cluster.workers <= 1):
+        threads = 1  # a worker's: one torch thread each (app.fanout)
     config = settings.imitation
     n = 2 if quick else objects
+    todo = cases(tasks, n, seed)
+    measured: dict[int, Measured] = {}
+    errors = []  # a prediction that raised: named with its error, and the others go on
+    for outcome in fan_out(measure, todo, _settings, (settings, threads), cluster):
+        case = todo[outcome.index]
+        if outcome.failed:
+            errors.append(f"{case.task} object {case.object_seed}: {outcome.error}")
+        else:
+            measured[outcome.index] = outcome.value
     figures: dict = {"method": method, "schedule": schedule, "objects_per_task": n, "inits": config.inits,
                      "prune_every": config.prune_every, "explore_points": config.explore_points,
-                     "iterations": config.iterations, "patience": config.patience, "threads": torch.get_num_threads()}
+                     "iterations": config.iterations, "patience": config.patience, "threads": threads,
+                     "workers": cluster.workers if cluster.local else None}
     for name in tasks:
-        t = task(name)
-        rng = np.random.default_rng([seed, len(name)])
-        seeds = rng.choice(split(t.category, "test"), size=n, replace=False)
-        rows, per_template = [], []
-        for s in seeds:
-            mesh, T_base_obj, cloud, scale = target(t.category, int(s), rng, cell)
-            start = time.perf_counter()
-            pred = predict(t, cloud, settings, cell.fixture_pose(t.fixture))
-            wall = time.perf_counter() - start
-            g = grasp_error(t.category, T_base_obj, pred.T_base_tcp, T_base_obj @ teacher_grasp(mesh))
-            goal = cell.fixture_pose(t.fixture) @ teacher_place(t, mesh, scale)
-            p = place_error(t.fixture, pred.motion @ T_base_obj, goal)
-            rows.append((wall, *g, *p, *pred.iterations.values()))
-            per_template.extend(pred.seconds.values())
-        a = np.array(rows, dtype=float)
-        med = np.median(a, axis=0)
-        figures.update({
-            f"{name}_seconds_per_prediction": round(float(med[0]), 2),  # the whole predict: grasp, place, refinements
-            f"{name}_seconds_per_template": round(float(np.median(per_template)), 2),
-            f"{name}_grasp_error_mm": round(1000 * float(med[1]), 1),
-            f"{name}_grasp_error_deg": round(float(med[2]), 1),
-            f"{name}_place_error_mm": round(1000 * float(med[3]), 1),
-            f"{name}_place_error_deg": round(float(med[4]), 1),
-        })
-        if a.shape[1] > 5:
-            figures[f"{name}_iterations"] = [int(v) for v in med[5:]]
+        done = [measured[i] for i, c in enumerate(todo) if c.task == name and i in measured]
+        figures.update(_figures(name, done) if done else {})
+        figures[f"{name}_failed"] = n - len(done)
+    if errors:
+        figures["errors"] = sorted(errors)
     return figures

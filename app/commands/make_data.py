@@ -45,9 +45,11 @@ def config_from(args: argparse.Namespace):
 
 def run(args: argparse.Namespace) -> int:
     from app.console.options import cluster_of
-    from app.training.data import make_dataset
+    from app.fanout.cluster import warmed
 
-    cluster = cluster_of(args)  # before the data modules load and anything is written
-    report = make_dataset(config_from(args), args.out, workers=cluster, progress=not args.json)
+    with warmed(cluster_of(args)) as cluster:  # checked before anything is written; Ray starts while modules load
+        from app.training.data import make_dataset
+
+        report = make_dataset(config_from(args), args.out, workers=cluster, progress=not args.json)
     print_figures(report.figures(), args.json)
     return 1 if report.failed else 0

@@ -10,10 +10,11 @@ from __future__ import annotations
 import logging
 import os
 import socket
+import threading
 import warnings
 from contextlib import contextmanager
-from dataclasses import dataclass
-from typing import Iterator
+from dataclasses import dataclass, field, replace
+from typing import Callable, Iterator
 
 THREAD_VARIABLES = ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS")  # one BLAS/OpenMP thread per task
 CONNECT_TIMEOUT = 3.0  # s to wait for a cluster's head to accept a connection
@@ -29,6 +30,7 @@ class ClusterConfig:
 
     workers: int = 2
     address: str | None = None
+    startup: "Startup | None" = field(default=None, compare=False, repr=False)  # a local Ray already starting
 
     @property
     def local(self) -> bool:
@@ -58,6 +60,94 @@ def _quiet_ray() -> None:
     warnings.filterwarnings("ignore", module="ray")
 
 
+def _init_arguments(config: ClusterConfig) -> dict:
+    """ray.init's arguments: dashboard and log forwarding off; remote workers get one BLAS thread each."""
+    _quiet_ray()
+    for name in THREAD_VARIABLES:  # local workers inherit them; remote ones get them from the runtime env
+        os.environ.setdefault(name, "1")
+    common = dict(include_dashboard=False, log_to_driver=False, configure_logging=True, logging_level=logging.ERROR,
+                  runtime_env={"env_vars": {n: "1" for n in THREAD_VARIABLES}} if not config.local else None)
+    if config.local:
+        common.update(address="local", num_cpus=config.workers)  # never a cluster found on this machine
+    return common
+
+
+class Startup:
+    """A local Ray that lives in a thread of its own: ray.init waits seconds on its servers, and the
+    command works meanwhile. Callbacks given to `when_up` run once it is up; `join` re-raises a failed
+    start. The thread shuts Ray down too (`stop`): shut down from another thread, Ray 2.60 waits 5 s more."""
+
+    def __init__(self, config: ClusterConfig) -> None:
+        self.done = threading.Event()  # set once ray.init has returned or failed, and the callbacks have run
+        self._stop = threading.Event()
+        self._lock = threading.Lock()
+        self._up = False  # ray.init has returned or failed (callbacks given from now on run in the caller)
+        self._callbacks: list[Callable[[], None]] = []
+        self._error: BaseException | None = None
+        self._thread = threading.Thread(target=self._life, args=(config,), name="ray", daemon=True)
+        self._thread.start()
+
+    def _life(self, config: ClusterConfig) -> None:
+        import ray
+
+        try:
+            ray.init(**_init_arguments(config))
+        except BaseException as exc:  # noqa: BLE001 - handed to the command's thread by join()
+            self._error = exc
+        with self._lock:
+            self._up, callbacks, self._callbacks = True, self._callbacks, []
+        for callback in callbacks:
+            self._call(callback)
+        self.done.set()
+        self._stop.wait()
+        ray.shutdown()
+
+    def _call(self, callback: Callable[[], None]) -> None:
+        if self._error is None:
+            try:
+                callback()
+            except BaseException as exc:  # noqa: BLE001 - handed to the command's thread by join()
+                self._error = exc
+
+    def when_up(self, callback: Callable[[], None]) -> None:
+        """`callback()` once Ray is up: in Ray's thread then, or here if it is up already."""
+        with self._lock:
+            if not self._up:
+                self._callbacks.append(callback)
+                return
+        self.done.wait()
+        self._call(callback)
+
+    def join(self) -> None:
+        """Wait for the start and its callbacks; the exception, if one failed, raised here."""
+        self.done.wait()
+        if self._error is not None:
+            raise self._error
+
+    def stop(self) -> None:
+        """Ray shut down (after its start, if that is still under way)."""
+        self._stop.set()
+        self._thread.join()
+
+
+@contextmanager
+def warmed(config: ClusterConfig) -> Iterator[ClusterConfig]:
+    """The config with a local Ray starting in the background for the block (`startup`), shut down after
+    it; unchanged for one worker (no Ray), a cluster at an address (joined when the work starts), or a
+    config whose Ray is already starting."""
+    if not config.local or config.workers <= 1 or config.startup is not None:
+        yield config
+        return
+    from app.fanout.guard import guarded
+
+    with guarded():
+        startup = Startup(config)
+        try:
+            yield replace(config, startup=startup)
+        finally:
+            startup.stop()
+
+
 @contextmanager
 def started(config: ClusterConfig) -> Iterator[None]:
     """Ray up for the block (started, or joined at `config.address`), shut down after it."""
@@ -65,14 +155,9 @@ def started(config: ClusterConfig) -> Iterator[None]:
 
     from app.fanout.guard import guarded
 
-    _quiet_ray()
-    for name in THREAD_VARIABLES:  # local workers inherit them; remote ones get them from the runtime env
-        os.environ.setdefault(name, "1")
-    common = dict(include_dashboard=False, log_to_driver=False, configure_logging=True, logging_level=logging.ERROR,
-                  runtime_env={"env_vars": {n: "1" for n in THREAD_VARIABLES}} if not config.local else None)
     if config.local:
         with guarded():
-            ray.init(address="local", num_cpus=config.workers, **common)  # never a cluster found on this machine
+            ray.init(**_init_arguments(config))
             try:
                 yield
             finally:
@@ -80,7 +165,7 @@ def started(config: ClusterConfig) -> Iterator[None]:
         return
     check_reachable(config.address)
     try:
-        ray.init(address=config.address, **common)
+        ray.init(address=config.address, **_init_arguments(config))
     except (ConnectionError, RuntimeError) as exc:  # RuntimeError: Ray's version check
         ray.shutdown()  # a half-made connection
         raise ClusterError(f"--address {config.address}: {' '.join(str(exc).split())}") from None

@@ -195,7 +195,7 @@ def run_shards(cfg: DataConfig, shards: list, todo: list[int], out: Path,
     """Yield, as shards finish (app.fanout), a written shard's record, or (index, error) for a shard whose
     task raised: nothing of it is written, and running again retries it."""
     jobs = [(i, shards[i]) for i in todo]
-    for outcome in fan_out(_timed_shard, jobs, _same, cfg, cluster):
+    for outcome in fan_out(_timed_shard, jobs, _same, cfg, cluster, helps=True):  # a shard's state: none
         index, instances = jobs[outcome.index]
         if outcome.failed:
             yield index, outcome.error
