@@ -83,13 +83,17 @@ def convex_shape(client: int, points: np.ndarray, path: Path) -> int:
     return p.createCollisionShape(p.GEOM_MESH, fileName=str(path), physicsClientId=client)
 
 
+NEAR_ROTATION = 1e-6  # |R^T R - I| up to which Eigen's conversion, normalised, is used (a float32 pose: ~2e-7)
+
+
 def pose_to_pybullet(T: np.ndarray) -> tuple[list[float], list[float]]:
-    """4x4 pose -> (position, xyzw quaternion) as PyBullet wants them. A rotation goes through
-    Eigen's conversion (pinocchio's, 2 us: the planning scene poses the carried object at every
-    state it checks); a matrix that is not one, through SciPy's nearest rotation (50 us)."""
+    """4x4 pose -> (position, xyzw quaternion) as PyBullet wants them. A rotation, or a matrix within
+    NEAR_ROTATION of one, goes through Eigen's conversion, normalised (pinocchio's, 2 us: the planning
+    scene poses the carried object at every state it checks; the quaternion is as far from the
+    nearest rotation's as the matrix is); a matrix farther off, through SciPy's nearest rotation (50 us)."""
     R = np.ascontiguousarray(T[:3, :3], dtype=np.float64)
-    if np.abs(R.T @ R - np.eye(3)).max() < 1e-9:
-        return T[:3, 3].tolist(), pin.Quaternion(R).coeffs().tolist()
+    if np.abs(R.T @ R - np.eye(3)).max() < NEAR_ROTATION:
+        return T[:3, 3].tolist(), pin.Quaternion(R).normalized().coeffs().tolist()
     return T[:3, 3].tolist(), Rotation.from_matrix(R).as_quat().tolist()
 
 

@@ -72,3 +72,9 @@ def test_pybullet_pose_conversion_round_trips_and_matches_scipy(rng):
     _, quaternion = pose_to_pybullet(nearly)
     assert abs(np.linalg.norm(quaternion) - 1.0) < 1e-12
     assert np.allclose(pybullet_to_pose([0, 0, 0], quaternion)[:3, :3], nearly[:3, :3], atol=1e-5)
+    for T in se3.random_poses(20, rng):  # float32 poses (a held object's), off a rotation by ~1e-7: Eigen's path
+        single = T.astype(np.float32).astype(np.float64)
+        _, quaternion = pose_to_pybullet(single)
+        expected = Rotation.from_matrix(single[:3, :3]).as_quat()  # SciPy's nearest rotation
+        assert abs(np.linalg.norm(quaternion) - 1.0) < 1e-12
+        assert min(np.abs(quaternion - expected).max(), np.abs(quaternion + expected).max()) < 1e-6
