@@ -1,7 +1,8 @@
 """Where fan-out runs: a local Ray started for the command, or a cluster the user started.
 
 Locally Ray gets `workers` CPUs (one task per core by default), its dashboard off, and its
-processes tied to the command (`guard`). With an address, the command joins that cluster: it
+processes tied to the command (`guard`); it starts and stops in a thread of its own (`Startup`), so
+that the command can work while it starts. With an address, the command joins that cluster: it
 checks first that something answers there, so a wrong address fails in one line instead of
 Ray's minute of retries.
 """
@@ -131,6 +132,19 @@ class Startup:
 
 
 @contextmanager
+def _local_ray(config: ClusterConfig) -> Iterator[Startup]:
+    """A local Ray starting for the block, its processes guarded, shut down after it."""
+    from app.fanout.guard import guarded
+
+    with guarded():
+        startup = Startup(config)
+        try:
+            yield startup
+        finally:
+            startup.stop()
+
+
+@contextmanager
 def warmed(config: ClusterConfig) -> Iterator[ClusterConfig]:
     """The config with a local Ray starting in the background for the block (`startup`), shut down after
     it; unchanged for one worker (no Ray), a cluster at an address (joined when the work starts), or a
@@ -138,14 +152,8 @@ def warmed(config: ClusterConfig) -> Iterator[ClusterConfig]:
     if not config.local or config.workers <= 1 or config.startup is not None:
         yield config
         return
-    from app.fanout.guard import guarded
-
-    with guarded():
-        startup = Startup(config)
-        try:
-            yield replace(config, startup=startup)
-        finally:
-            startup.stop()
+    with _local_ray(config) as startup:
+        yield replace(config, startup=startup)
 
 
 @contextmanager
@@ -153,15 +161,10 @@ def started(config: ClusterConfig) -> Iterator[None]:
     """Ray up for the block (started, or joined at `config.address`), shut down after it."""
     import ray
 
-    from app.fanout.guard import guarded
-
     if config.local:
-        with guarded():
-            ray.init(**_init_arguments(config))
-            try:
-                yield
-            finally:
-                ray.shutdown()
+        with _local_ray(config) as startup:
+            startup.join()
+            yield
         return
     check_reachable(config.address)
     try:
