@@ -227,7 +227,8 @@ def test_a_small_mug_is_approached_with_the_fingers_open_only_as_wide_as_the_rim
     assert any("way in to the grasp passes through" in c["outcome"] for c in wide.candidates), wide.candidates
     result = _sim(spec)
     assert result.failed_stage not in ("approach", "grasp", "lift"), result.reason
-    assert result.attempts[-1]["outcome"] == "held" and "carry" in result.seconds
+    first = result.attempts[0]["outcome"]  # held through the carry: then hung, or missed at the place
+    assert "carry" in result.seconds and (first == "held" or first.startswith("place")), result.attempts
 
 
 def _series(seeds: list[int]) -> list[dict]:
