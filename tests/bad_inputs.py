@@ -114,6 +114,7 @@ CORPUS: list[tuple[tuple[str, ...], str]] = [
     (("bench", "--workers", "0", "--out", "b"), "--workers"),
     (("make-data", "--workers", "-3", "--out", "d"), "--workers"),
     (("make-data", "--workers", "0", "--out", "d"), "--workers"),
+    (("bench-imitation", "--workers", "0"), "--workers"),
     (("bench", "--address", "127.0.0.1:9", "--out", "b"), "127.0.0.1:9"),
     (("make-data", "--address", "no-port-here", "--out", "d"), "no-port-here"),
     # the network

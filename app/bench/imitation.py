@@ -113,11 +113,12 @@ def measure(settings: PredictConfig, case: Case) -> Measured:
     """Time one whole `predict` on the case's object and score it against the teacher."""
     cell, t = CellConfig(), task(case.task)
     mesh, T_base_obj, cloud, scale = target(t.category, case.object_seed, np.random.default_rng(case.draw), cell)
+    T_base_fixture = cell.fixture_pose(t.fixture)
     start = time.perf_counter()
-    pred = predict(t, cloud, settings, cell.fixture_pose(t.fixture))
+    pred = predict(t, cloud, settings, T_base_fixture)
     wall = time.perf_counter() - start
     g = grasp_error(t.category, T_base_obj, pred.T_base_tcp, T_base_obj @ teacher_grasp(mesh))
-    goal = cell.fixture_pose(t.fixture) @ teacher_place(t, mesh, scale)
+    goal = T_base_fixture @ teacher_place(t, mesh, scale)
     p = place_error(t.fixture, pred.motion @ T_base_obj, goal)
     return Measured((wall, *g, *p, *pred.iterations.values()), tuple(pred.seconds.values()))
 

@@ -79,7 +79,7 @@ class Startup:
     start. The thread shuts Ray down too (`stop`): shut down from another thread, Ray 2.60 waits 5 s more."""
 
     def __init__(self, config: ClusterConfig) -> None:
-        self.done = threading.Event()  # set once ray.init has returned or failed, and the callbacks have run
+        self._done = threading.Event()  # set once ray.init has returned or failed, and the callbacks have run
         self._stop = threading.Event()
         self._lock = threading.Lock()
         self._up = False  # ray.init has returned or failed (callbacks given from now on run in the caller)
@@ -99,7 +99,7 @@ class Startup:
             self._up, callbacks, self._callbacks = True, self._callbacks, []
         for callback in callbacks:
             self._call(callback)
-        self.done.set()
+        self._done.set()
         self._stop.wait()
         ray.shutdown()
 
@@ -116,12 +116,12 @@ class Startup:
             if not self._up:
                 self._callbacks.append(callback)
                 return
-        self.done.wait()
+        self._done.wait()
         self._call(callback)
 
     def join(self) -> None:
         """Wait for the start and its callbacks; the exception, if one failed, raised here."""
-        self.done.wait()
+        self._done.wait()
         if self._error is not None:
             raise self._error
 
