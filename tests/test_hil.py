@@ -128,7 +128,9 @@ def test_stopJ_is_answered_while_a_motion_runs(arm, server):
     arm.stopJ()
     answered = time.monotonic() - start
     mover.join(10)
-    assert answered < 0.2 and outcome["arrived"] is False
+    # FAR is 1.3 s away at this speed and acceleration: the stop is answered well inside the 0.8 s
+    # still to go (not queued behind the motion), and the arm stands short of FAR (below).
+    assert answered < 0.5 and outcome["arrived"] is False
     assert np.abs(arm.getActualQ() - FAR).max() > 0.1 and np.abs(arm.getActualQd()).max() < 0.05
     assert "stop" in arm.getLastError()
 
