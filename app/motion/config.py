@@ -32,6 +32,9 @@ class MotionConfig:
     joint_acceleration: float = 4.0  # rad/s^2: half the base joints' 8 (docs/decisions.md, "Speeds")
     carry_speed: float = 1.05  # rad/s on the carry (the second look's turn of the wrist alone: joint_speed)
     carry_acceleration: float = 1.4  # rad/s^2 (faster, lying bottles hit the cell and stopped the arm)
+    carry_wrist_speed: float = 2.0  # rad/s on the wrist's joints (4-6) carrying an object held within `pivot_lever`
+    # of its centroid (a mug at its rim): the empty arm's, at a radius of a few decimetres
+    carry_wrist_acceleration: float = 4.0  # rad/s^2
     line_speed: float = 0.25  # m/s on the empty gripper's straight lines: retreat, clear (ur_rtde's moveL default)
     line_acceleration: float = 1.2  # m/s^2 (ur_rtde's moveL default)
     line_jerk: float = 20.0  # m/s^3: at 5, a 10 cm line never reached its speed (0.86 s instead of 0.6)
@@ -63,4 +66,5 @@ RANGES = (("approach_distance", 0.0, 0.5, "m", False), ("approach_cone", 0.0, 90
           ("gentle_line_acceleration", 0.0, 10.0, "m/s^2", False), ("gentle_line_jerk", 0.0, 100.0, "m/s^3", False),
           ("check_step", 0.0, 0.5, "rad", False),
           ("carry_speed", 0.0, 3.15, "rad/s", False), ("carry_acceleration", 0.0, 40.0, "rad/s^2", False),
+          ("carry_wrist_speed", 0.0, 3.2, "rad/s", False), ("carry_wrist_acceleration", 0.0, 40.0, "rad/s^2", False),
           ("end_tolerance", 0.0, 0.5, "rad", False), ("ik_candidates", 1, 8, "branches", True))

@@ -102,12 +102,12 @@ class Planner:
     def transit(self, q0: np.ndarray, q1: np.ndarray, label: str, ignore: tuple[str, ...] = (),
                 allowed: Callable[[np.ndarray], bool] | None = None,
                 search: SamplingConfig | None = None, held: bool = False,
-                profile: tuple[float, float] | None = None) -> JointTrajectory:
+                profile: tuple[float | np.ndarray, float | np.ndarray] | None = None) -> JointTrajectory:
         """A collision-free chain of Ruckig joint motions q0 -> q1: the direct one, else through the
         waypoints of the sampling planner (`app.motion.sampling`); `allowed`: a path constraint on
         every state (`held_without_pivot`); `search`: the planner's settings (the configured ones when None);
         `held`: the object is in the fingers (timed at the carry's speed); `profile`: (speed rad/s,
-        acceleration rad/s^2) instead of either."""
+        acceleration rad/s^2; each a scalar or per joint (6,)) instead of either."""
         profile = profile or self._profile(held)
         direct = self._timed(np.array([q0, q1]), label, profile=profile)
         hits = self._collisions(direct, ignore, allowed)
@@ -139,11 +139,22 @@ class Planner:
         search is short (`short_lever_search`) and any transit is taken without a word."""
         short = lever < self.config.pivot_lever
         search = replace(self.config.sampling, states=self.config.short_lever_search) if short else None
+        profile = self._carry_profile(short)
         try:
             return self.transit(q0, q1, "carry", ignore, held_without_pivot(self.kin, q0, q1, self.config.carry_pivot),
-                                search, held=True), True
+                                search, profile=profile), True
         except PlanningFailure:
-            return self.transit(q0, q1, "carry", ignore, held=True), short
+            return self.transit(q0, q1, "carry", ignore, profile=profile), short
+
+    def _carry_profile(self, short: bool) -> tuple[np.ndarray, np.ndarray]:
+        """(speeds rad/s, accelerations rad/s^2) (6,) of a carry: the carry's on every joint, the wrist's
+        three (4-6) at `carry_wrist_*` for an object held near its centroid (`short`: its lever under
+        `pivot_lever`), which they swing about a short radius (docs/decisions.md, "Speeds")."""
+        c = self.config
+        speed, acceleration = np.full(6, c.carry_speed), np.full(6, c.carry_acceleration)
+        if short:
+            speed[3:], acceleration[3:] = c.carry_wrist_speed, c.carry_wrist_acceleration
+        return speed, acceleration
 
     def held_lever(self, T_base_grasp: np.ndarray) -> float:
         """How far (m) the observed object's centroid lies from the fingers' axis (the tool's y through
