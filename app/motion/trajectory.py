@@ -130,13 +130,21 @@ def concatenate(parts: list[JointTrajectory], label: str = "") -> JointTrajector
 def path_timing(q_path: np.ndarray, length: float, limits: JointLimits, speed: float, acceleration: float,
                 jerk: float, label: str = "") -> JointTrajectory:
     """Time a geometric joint path q_path (K, D) (uniform in the path parameter s in [0, length])
-    with a 1-D Ruckig profile on s, capped so that no joint exceeds its velocity or acceleration
-    limit: |dq/dt| = |dq/ds| ds/dt."""
-    s_grid = np.linspace(0.0, length, len(q_path))
-    dq_ds = np.abs(np.diff(q_path, axis=0)) / max(length / (len(q_path) - 1), 1e-12)  # (K-1, D)
+    with a 1-D Ruckig profile on s, capped so that no joint exceeds its velocity or acceleration limit:
+
+        dq/dt = q'(s) ds/dt,    d2q/dt2 = q'(s) d2s/dt2 + q''(s) (ds/dt)^2
+
+    ds/dt <= v_j / max|q'_j|; each term of the acceleration gets half of a_j: d2s/dt2 <= a_j / (2 max|q'_j|),
+    (ds/dt)^2 <= a_j / (2 max|q''_j|). The second bounds a line that bends sharply in joint space, as one
+    near the wrist's singularity does (its wrist joints turn 2 rad over 10 cm)."""
+    ds = length / max(len(q_path) - 1, 1)
+    dq_ds = np.abs(np.diff(q_path, axis=0)) / max(ds, 1e-12)  # (K-1, D)
     worst = np.maximum(dq_ds.max(axis=0), 1e-9)  # (D,)
-    v = min(speed, float(np.min(limits.velocity / worst)))
-    a = min(acceleration, float(np.min(limits.acceleration / worst)))
+    bend = np.abs(np.diff(q_path, 2, axis=0)).max(axis=0, initial=0.0) / max(ds, 1e-12) ** 2  # (D,) max |q''|
+    v = min(speed, float(np.min(limits.velocity / worst)),
+            float(np.min(np.sqrt(limits.acceleration / (2.0 * np.maximum(bend, 1e-9))))))
+    a = min(acceleration, float(np.min(limits.acceleration / (2.0 * worst))))
+    s_grid = np.linspace(0.0, length, len(q_path))
     profile = ruckig_profile(np.zeros(1), np.array([length]), np.array([v]), np.array([a]), np.array([jerk]))
     times, s, sd = sample_profile(profile)
     s, sd = s[:, 0], sd[:, 0]
@@ -148,12 +156,17 @@ def path_timing(q_path: np.ndarray, length: float, limits: JointLimits, speed: f
 def remainder(traj: JointTrajectory, q: np.ndarray, limits: JointLimits, speed: float = 0.5,
               acceleration: float = 1.0) -> JointTrajectory:
     """The rest of `traj` for an arm stopped at rest at q on (or near) its path: from q through the samples
-    after the nearest one, timed again from rest (`path_timing`, on the path's joint-space length)."""
+    after the nearest one, resampled evenly along the joint-space path and timed again from rest
+    (`path_timing`, on the path's joint-space length)."""
     k = int(np.abs(traj.q - q).max(axis=1).argmin())
     path = np.vstack([q, traj.q[k + 1:]]) if k + 1 < len(traj.q) else np.vstack([q, traj.end])  # (K, D)
-    length = float(np.linalg.norm(np.diff(path, axis=0), axis=1).sum())
+    steps = np.linalg.norm(np.diff(path, axis=0), axis=1)  # (K-1,)
+    length = float(steps.sum())
     if length < 1e-9:
         return JointTrajectory(np.zeros(2), np.vstack([q, q]), np.zeros((2, len(q))), traj.label)
+    along = np.concatenate([[0.0], np.cumsum(steps)])  # (K,) a trajectory's samples are even in time, not in length
+    even = np.linspace(0.0, length, len(path))
+    path = np.stack([np.interp(even, along, path[:, j]) for j in range(path.shape[1])], axis=1)
     return path_timing(path, length, limits, speed, acceleration, float(np.min(limits.jerk)), traj.label)
 
 
