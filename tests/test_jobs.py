@@ -200,7 +200,7 @@ def test_a_mug_hung_at_its_hang_drags_on_the_peg_only_when_bullet_thickens_the_h
     (1 mm) its handle's hole closes on the peg and the handle drags along the place line: the mug does
     not hang from the first place (let go off the rack, or dragging the arm into a stop); at the cell's 0.2 mm
     (`SimWorldConfig.mesh_margin`) the peg passes through and it hangs at the first place, as it does
-    placed `MotionConfig.peg_clearance` (12 mm) above and dropped."""
+    placed `MotionConfig.peg_clearance` (7 mm) above and dropped."""
     from app.motion.config import MotionConfig
 
     at_hang = JobConfig.of("teacher", motion=MotionConfig(peg_clearance=0.0))

@@ -20,8 +20,8 @@ class MotionConfig:
     lift_height: float = 0.12  # m, straight up after the grasp
     place_distances: tuple[float, ...] = (0.10, 0.20)  # m, pre-place back along the fixture's approach direction:
     # the first where the held object's hull is clear of the cell (the hull fills a mug's handle, which hangs on the peg)
-    peg_clearance: float = 0.012  # m the object is placed above its hang on a peg, and dropped (app.motion.place_line):
-    # room for a mug turned a few degrees in the grasp to pass its handle over the peg
+    peg_clearance: float = 0.007  # m the object is placed above its hang on a peg, and dropped (app.motion.place_line):
+    # room for a mug turned a few degrees in the grasp to pass its handle over the peg (12 mm: half the lines met it)
     peg_short: float = 0.0  # m the object is placed short of its hang, out along the peg
     retreat_distance: float = 0.10  # m, back along the tool axis after release
     carry_pivot: float = 45.0  # degrees gravity may turn about the fingers' axis on the carry (`held_without_pivot`)
