@@ -101,14 +101,14 @@ class Planner:
 
     def transit(self, q0: np.ndarray, q1: np.ndarray, label: str, ignore: tuple[str, ...] = (),
                 allowed: Callable[[np.ndarray], bool] | None = None,
-                search: SamplingConfig | None = None, held: bool = False,
+                search: SamplingConfig | None = None,
                 profile: tuple[float | np.ndarray, float | np.ndarray] | None = None) -> JointTrajectory:
         """A collision-free chain of Ruckig joint motions q0 -> q1: the direct one, else through the
         waypoints of the sampling planner (`app.motion.sampling`); `allowed`: a path constraint on
         every state (`held_without_pivot`); `search`: the planner's settings (the configured ones when None);
-        `held`: the object is in the fingers (timed at the carry's speed); `profile`: (speed rad/s,
-        acceleration rad/s^2; each a scalar or per joint (6,)) instead of either."""
-        profile = profile or self._profile(held)
+        `profile`: (speed rad/s, acceleration rad/s^2; each a scalar or per joint (6,)) instead of the empty
+        arm's (`_empty_profile`; a carry's: `_carry_profile`)."""
+        profile = profile or self._empty_profile()
         direct = self._timed(np.array([q0, q1]), label, profile=profile)
         hits = self._collisions(direct, ignore, allowed)
         if not hits:
@@ -165,10 +165,9 @@ class Planner:
         r = transform_points(invert(T_base_grasp), solid.mean(axis=0, keepdims=True))[0]  # (3,) TCP frame
         return float(np.hypot(r[0], r[2]))
 
-    def _profile(self, held: bool) -> tuple[float, float]:
-        """(speed rad/s, acceleration rad/s^2) of a transit: the carry's while the object is held."""
-        c = self.config
-        return (c.carry_speed, c.carry_acceleration) if held else (c.joint_speed, c.joint_acceleration)
+    def _empty_profile(self) -> tuple[float, float]:
+        """(speed rad/s, acceleration rad/s^2) of a transit with nothing held."""
+        return self.config.joint_speed, self.config.joint_acceleration
 
     def _blended(self, waypoints: np.ndarray, label: str, profile: tuple[float, float], ignore: tuple[str, ...],
                  allowed: Callable[[np.ndarray], bool] | None) -> JointTrajectory:
@@ -183,7 +182,7 @@ class Planner:
                profile: tuple[float, float] | None = None) -> JointTrajectory:
         """Ruckig rest-to-rest segments through joint waypoints (K, 6); `straight`: each on its straight segment;
         `profile`: (speed, acceleration), the empty arm's transit when None."""
-        return through_waypoints(list(waypoints), self.limits, *(profile or self._profile(False)), label, straight)
+        return through_waypoints(list(waypoints), self.limits, *(profile or self._empty_profile()), label, straight)
 
     def line(self, q0: np.ndarray, T1: np.ndarray, label: str, ignore: tuple[str, ...] = (),
              gentle: bool = False) -> JointTrajectory:
