@@ -72,3 +72,20 @@ def test_bench_jobs_reports_the_median_and_p90_of_each_jobs_motion():
     assert t["bowl_decide_seconds"] == t["bowl_imitate_seconds"]  # no perceive or plan stage in these records
     assert t["bowl_job_seconds"] == {"median": 2.6, "p90": 3.0}
     assert t["bowl_planning_seconds"] == {"median": 0.3, "p90": 0.38}
+
+
+def test_each_motion_counts_to_the_stage_it_ran_in_and_the_stages_sum_to_the_whole(arm):
+    meter = MeteredArm(arm)
+    q0 = arm.getActualQ()
+    meter.stage = "approach"
+    assert meter.moveJ(q0 + [0.4, 0, 0, 0, 0, 0], speed=0.4)  # 1 s, 0.4 rad
+    meter.stage = "carry"
+    times, q = trajectory(arm.getActualQ())
+    assert meter.executeTrajectory(times, q)  # 2 s, 1.5 rad
+    assert meter.moveJ(q0, speed=0.5)
+    by = meter.record()["by_stage"]
+    assert list(by) == ["approach", "carry"]
+    assert by["approach"] == {"motion_seconds": pytest.approx(1.0), "joint_travel_rad": pytest.approx(0.4)}
+    assert by["carry"]["motion_seconds"] == pytest.approx(2.0 + 0.9 / 0.5)
+    assert sum(s["motion_seconds"] for s in by.values()) == pytest.approx(meter.seconds)
+    assert sum(s["joint_travel_rad"] for s in by.values()) == pytest.approx(meter.travel)

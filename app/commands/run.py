@@ -164,7 +164,8 @@ def _print_one(r) -> None:
     if r.plan:
         print(f"  plan: {r.plan['planning_seconds']} s to plan, {r.plan['trajectory_seconds']} s of motion")
     if r.motion:
-        print(f"  moved: {r.motion['motion_seconds']:.2f} s, {r.motion['joint_travel_rad']:.2f} rad of joint travel")
+        print(f"  moved: {r.motion['motion_seconds']:.2f} s, {r.motion['joint_travel_rad']:.2f} rad of joint travel; "
+              + "  ".join(f"{k} {v['motion_seconds']:.2f} s" for k, v in r.motion.get("by_stage", {}).items()))
     for name, pose in r.poses.items():
         print(f"  {name} TCP [x y z rx ry rz]: {pose}")
     if r.seen:

@@ -10,6 +10,7 @@ import numpy as np
 import trimesh
 
 from app.jobs.log import JobLog
+from app.jobs.motion_meter import MeteredArm
 from app.jobs.record import JobHooks, JobResult, stage
 from app.jobs.settings import JobConfig, is_hang
 from app.layout import fixture_meshes
@@ -55,8 +56,10 @@ class JobContext:
     @contextmanager
     def stage(self, name: str):
         """Time stage `name`; a failure in it is recorded as this stage's (`app.jobs.record.stage`); the
-        log hears of its start and its end, with the arm's state then."""
+        log hears of its start and its end, with the arm's state then; a metered arm counts its motions to it."""
         self.log.stage(name, "started")
+        if isinstance(self.arm, MeteredArm):
+            self.arm.stage = name
         try:
             with stage(self.result, name, self.hooks):
                 yield

@@ -2,7 +2,8 @@
 joints' travel (our addition, for cycle time: docs/benchmark.md).
 
 `MeteredArm` stands in for the job's arm. Every motion verb (moveJ, moveL, executeTrajectory) is
-timed by the controller's timestamp before and after it, and its travel is the summed joint
+timed by the controller's timestamp before and after it, and counted to the job's stage then
+(`stage`, set by `JobContext.stage`: where the cycle goes), and its travel is the summed joint
 distance actually covered,
 
     travel = sum_k |q_k+1 - q_k|_1        over the joint path as far as the arm got,
@@ -36,6 +37,8 @@ class MeteredArm:
         self.arm = arm
         self.seconds = 0.0
         self.travel = 0.0
+        self.stage = ""  # the job's stage the next motions count to
+        self.by_stage: dict[str, list[float]] = {}  # stage -> [seconds, rad]
 
     def __getattr__(self, name: str) -> Any:
         return getattr(self.arm, name)
@@ -49,9 +52,11 @@ class MeteredArm:
     def executeTrajectory(self, times: np.ndarray, q: np.ndarray, qd: np.ndarray | None = None) -> bool:
         return self._metered(lambda: self.arm.executeTrajectory(times, q, qd), q)
 
-    def record(self) -> dict[str, float]:
-        """JSON-ready: the seconds in motion and the joint travel so far."""
-        return {"motion_seconds": round(self.seconds, 3), "joint_travel_rad": round(self.travel, 3)}
+    def record(self) -> dict:
+        """JSON-ready: the seconds in motion and the joint travel so far, and each stage's (`by_stage`)."""
+        return {"motion_seconds": round(self.seconds, 3), "joint_travel_rad": round(self.travel, 3),
+                "by_stage": {name: {"motion_seconds": round(s, 3), "joint_travel_rad": round(rad, 3)}
+                             for name, (s, rad) in self.by_stage.items()}}
 
     def _metered(self, move: Callable[[], bool], path: np.ndarray | None = None) -> bool:
         q0, t0 = self.arm.getActualQ(), self.arm.getTimestamp()
@@ -59,6 +64,11 @@ class MeteredArm:
             return move()
         finally:
             q1 = self.arm.getActualQ()
-            self.seconds += round(self.arm.getTimestamp() - t0, 6)  # rounded: the same motion, started later on
+            seconds = round(self.arm.getTimestamp() - t0, 6)  # rounded: the same motion, started later on
             # the controller's clock, differs in the last bits of the difference of two larger times
-            self.travel += float(np.abs(q1 - q0).sum()) if path is None else path_travel(path, q1)
+            travel = float(np.abs(q1 - q0).sum()) if path is None else path_travel(path, q1)
+            self.seconds += seconds
+            self.travel += travel
+            counted = self.by_stage.setdefault(self.stage, [0.0, 0.0])
+            counted[0] += seconds
+            counted[1] += travel
