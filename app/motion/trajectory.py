@@ -148,9 +148,14 @@ def path_timing(q_path: np.ndarray, length: float, limits: JointLimits, speed: f
     profile = ruckig_profile(np.zeros(1), np.array([length]), np.array([v]), np.array([a]), np.array([jerk]))
     times, s, sd = sample_profile(profile)
     s, sd = s[:, 0], sd[:, 0]
-    q = np.stack([np.interp(s, s_grid, q_path[:, j]) for j in range(q_path.shape[1])], axis=1)
-    slope = np.stack([np.interp(s, s_grid[:-1], np.diff(q_path[:, j]) / np.diff(s_grid)) for j in range(q_path.shape[1])], axis=1)
+    q = interpolate_columns(s, s_grid, q_path)
+    slope = interpolate_columns(s, s_grid[:-1], np.diff(q_path, axis=0) / np.diff(s_grid)[:, None])
     return JointTrajectory(times, q, slope * sd[:, None], label)
+
+
+def interpolate_columns(x: np.ndarray, xp: np.ndarray, fp: np.ndarray) -> np.ndarray:
+    """(len(x), D): each column of fp (K, D), given at xp (K,), linearly interpolated at x."""
+    return np.stack([np.interp(x, xp, fp[:, j]) for j in range(fp.shape[1])], axis=1)
 
 
 def remainder(traj: JointTrajectory, q: np.ndarray, limits: JointLimits, speed: float = 0.5,
@@ -166,7 +171,7 @@ def remainder(traj: JointTrajectory, q: np.ndarray, limits: JointLimits, speed: 
         return JointTrajectory(np.zeros(2), np.vstack([q, q]), np.zeros((2, len(q))), traj.label)
     along = np.concatenate([[0.0], np.cumsum(steps)])  # (K,) a trajectory's samples are even in time, not in length
     even = np.linspace(0.0, length, len(path))
-    path = np.stack([np.interp(even, along, path[:, j]) for j in range(path.shape[1])], axis=1)
+    path = interpolate_columns(even, along, path)
     return path_timing(path, length, limits, speed, acceleration, float(np.min(limits.jerk)), traj.label)
 
 
