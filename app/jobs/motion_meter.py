@@ -35,10 +35,18 @@ class MeteredArm:
 
     def __init__(self, arm: Arm) -> None:
         self.arm = arm
-        self.seconds = 0.0
-        self.travel = 0.0
         self.stage = ""  # the job's stage the next motions count to
         self.by_stage: dict[str, list[float]] = {}  # stage -> [seconds, rad]
+
+    @property
+    def seconds(self) -> float:
+        """Seconds in motion so far, every stage's."""
+        return sum(s for s, _ in self.by_stage.values())
+
+    @property
+    def travel(self) -> float:
+        """Joint travel (rad) so far, every stage's."""
+        return sum(rad for _, rad in self.by_stage.values())
 
     def __getattr__(self, name: str) -> Any:
         return getattr(self.arm, name)
@@ -67,8 +75,6 @@ class MeteredArm:
             seconds = round(self.arm.getTimestamp() - t0, 6)  # rounded: the same motion, started later on
             # the controller's clock, differs in the last bits of the difference of two larger times
             travel = float(np.abs(q1 - q0).sum()) if path is None else path_travel(path, q1)
-            self.seconds += seconds
-            self.travel += travel
             counted = self.by_stage.setdefault(self.stage, [0.0, 0.0])
             counted[0] += seconds
             counted[1] += travel
