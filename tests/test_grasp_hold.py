@@ -131,3 +131,30 @@ def test_a_rim_grasp_holds_a_wall_flat_and_is_not_judged():
     mug = generate("mug", 100_000)
     held = judge_hold(grasp_pose(mug), mug.sample(20000, seed=0))
     assert held.holds is None and "a wall" in held.reason
+
+
+def test_a_grasp_above_the_top_closes_on_nothing_and_is_moved_down_onto_the_cap():
+    """A taller object than the demos': the imitated grasp's pads end above its top. Nothing lies between
+    them and all beside them lies below: ruled out, and the move down lands on the (straight) cap."""
+    mesh, sem = tapered_bottle({"cap_taper_deg": 0.0})
+    T = make_pose(SIDE, [0, 0, sem.height + 0.015])  # pads 22 mm wide: their lower edge 4 mm above the top
+    judged = judge_hold(T, seen_cloud(mesh), eye=EYE)
+    assert judged.holds is False and "close on nothing" in judged.reason
+    kept, ruled = holding([Candidate(T, np.eye(4), np.eye(4))], seen_cloud(mesh), EYE, HoldConfig(), [])
+    assert len(kept) == 1 and not ruled
+    assert sem.neck_range[1] < kept[0].T_base_tcp[2, 3] < sem.height, "moved down onto the cap"
+
+
+def test_a_rim_grasp_whose_rim_is_hidden_is_not_called_empty():
+    """The surface under a rim grasp hidden from the camera: the rim beside the fingers shows at their height,
+    so the grasp is left unjudged, not ruled out."""
+    from app.objects import generate
+    from app.predict.grasp_centering import swept_mask
+    from app.tasks.teacher import grasp_pose
+
+    mug = generate("mug", 100_000)
+    T = grasp_pose(mug)
+    cloud = mug.sample(20000, seed=0)
+    cloud = cloud[~swept_mask(T, cloud)]  # nothing between the fingers seen
+    held = judge_hold(T, cloud)
+    assert held.holds is None, held.reason

@@ -24,6 +24,10 @@ Two tests, each from Coulomb friction with coefficient mu between pad and object
   wall) is not a wedge and is not judged for taper.
 
 Too few points to judge leaves the grasp unjudged (`holds` None): a single view often hides one side.
+Nothing seen between the fingers, with all that lies beside them (along the finger width) below
+them, is judged not to hold: the fingers would close on nothing (a grasp imitated above a taller
+object's top); so is material that reaches less than `min_grip_height` above the pads' lower edge
+(the top edge of a cap). Moved down (`app.jobs.hold`), either may hold.
 """
 from __future__ import annotations
 
@@ -31,7 +35,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from app.predict.grasp_centering import nearest_layer, swept_points
+from app.predict.grasp_centering import nearest_layer, swept_mask, swept_points
 from hardware.gripper_geometry import GripperGeometry
 
 UP = np.array([0.0, 0.0, 1.0])  # against gravity, in the base frame
@@ -55,6 +59,10 @@ class HoldConfig:
     # one that slipped, is tried this far down its pad plane
     slip_away: float = 0.03  # m: after a slip, grasps this close to the slipped one are not tried again
     min_gravity: float = 0.3  # |u| below this: gravity runs along the closing axis, no taper to judge
+    min_grip_height: float = 0.008  # m: the material between the pads must reach this far above their lower edge
+    # (against gravity): less, and the fingers hold only the top of the object - a cap's top edge
+    beside: float = 0.025  # m: nothing seen between the fingers, and what lies this far beside their middle
+    # (along the finger width) all below them: the fingers would close above the object's top
 
 
 @dataclass(frozen=True)
@@ -105,11 +113,18 @@ def judge_hold(T_base_tcp: np.ndarray, cloud: np.ndarray, config: HoldConfig = H
     the fingers (see the module's docstring); `eye`: the camera's position (3,), whose view shows only
     the side of the object facing it (a side whose pad faces away is not judged)."""
     p = swept_points(T_base_tcp, cloud, geometry)  # (K, 3) TCP frame
+    if len(p) < config.min_cells and above_the_top(T_base_tcp, cloud, config, geometry, up):
+        return Hold(False, reason="nothing between the fingers and the object's top below them: "
+                                  "they would close on nothing")
     if len(p) < 2 * config.min_cells:
         return Hold(None, reason="too few points between the fingers to judge the hold")
     p = p[nearest_layer(p[:, 1])]  # what the fingers close on: a mug's far wall across its cavity is not held
     if np.ptp(p[:, 1]) < config.min_width:
         return Hold(None, reason=f"a grip {1000 * np.ptp(p[:, 1]):.0f} mm thick (a wall): held flat, not judged")
+    height = grip_height(p, T_base_tcp, config, geometry, up)
+    if height is not None and height < config.min_grip_height:
+        return Hold(False, reason=f"the fingers would hold only the top {1000 * max(height, 0.0):.0f} mm of it "
+                                  f"(at least {1000 * config.min_grip_height:.0f}): it would slide out")
     middle = (p[:, 1].min() + p[:, 1].max()) / 2
     sides = (1, -1)
     if eye is not None:
@@ -132,6 +147,37 @@ def judge_hold(T_base_tcp: np.ndarray, cloud: np.ndarray, config: HoldConfig = H
         return Hold(False, taper, cone, f"the surface under the pads narrows towards the top by {taper:.0f} deg "
                                         f"(more than {config.max_taper_deg:.0f}): it would slide out of the fingers")
     return Hold(True, taper, cone, "holds: antipodal contacts, no taper that slides out")
+
+
+def grip_height(p: np.ndarray, T_base_tcp: np.ndarray, config: HoldConfig,
+                geometry: GripperGeometry = GripperGeometry(), up: np.ndarray = UP) -> float | None:
+    """How far (m) the material between the pads (`p`, (K, 3) TCP frame) reaches above the pads' lowest
+    point, against gravity: max_k p_k . u - min_pad c . u over the pad's corners c; None when gravity runs
+    along the closing axis."""
+    u = up_in_pad_plane(T_base_tcp, up)  # (3,) TCP frame
+    if np.linalg.norm(u) < config.min_gravity:
+        return None
+    u = u / np.linalg.norm(u)
+    z0 = geometry.palm[2] - geometry.tcp_z  # the pad from the palm (z0) to the fingertips (z1), TCP frame
+    z1 = z0 + geometry.finger[2]
+    lowest = -geometry.finger[0] / 2 * abs(u[0]) + min(z0 * u[2], z1 * u[2])
+    return float((p @ u).max() - lowest)
+
+
+def above_the_top(T_base_tcp: np.ndarray, cloud: np.ndarray, config: HoldConfig,
+                   geometry: GripperGeometry = GripperGeometry(), up: np.ndarray = UP) -> bool:
+    """Whether what the cloud shows within `beside` of the fingers' middle (along the finger width) lies
+    all below the TCP, gravity running in the pad plane: a grasp above the object's top. (Where the
+    surface under a rim grasp is hidden from the camera, the rim beside it shows at the fingers'
+    height, and this is False.)"""
+    u = up_in_pad_plane(T_base_tcp, up)  # (3,) TCP frame
+    if np.linalg.norm(u) < config.min_gravity:
+        return False
+    near = np.asarray(cloud, float).reshape(-1, 3)[swept_mask(T_base_tcp, cloud, geometry, config.beside)]
+    if len(near) < config.min_cells:
+        return False
+    heights = (near - T_base_tcp[:3, 3]) @ (T_base_tcp[:3, :3] @ (u / np.linalg.norm(u)))  # (K,) m along up
+    return bool(np.all(heights < 0.0))
 
 
 def up_in_pad_plane(T_base_tcp: np.ndarray, up: np.ndarray = UP) -> np.ndarray:
