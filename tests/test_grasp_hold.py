@@ -181,3 +181,4 @@ def test_a_thin_tapered_nozzle_gripped_from_the_side_is_judged_not_held_flat():
     assert side.holds is False and "narrows towards the top" in side.reason, side.reason
     from_above = make_pose(np.array([[0, 1.0, 0], [1.0, 0, 0], [0, 0, -1.0]]), [0, 0, 0.012])  # closing along x
     assert judge_hold(from_above, nozzle_cloud(), eye=EYE).holds is None
+
