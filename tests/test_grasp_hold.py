@@ -158,27 +158,3 @@ def test_a_rim_grasp_whose_rim_is_hidden_is_not_called_empty():
     cloud = cloud[~swept_mask(T, cloud)]  # nothing between the fingers seen
     held = judge_hold(T, cloud)
     assert held.holds is None, held.reason
-
-
-def nozzle_cloud(height: float = 0.010, base_radius: float = 0.0058, taper_deg: float = 22.0) -> np.ndarray:
-    """(N, 3) the camera's (-x) half of a nozzle on a bottle's shoulder: a cone from z = 0 to `height`,
-    narrowing towards the top by `taper_deg`, over a 30 mm body below z = -0.02; depth noise 0.3 mm."""
-    rng = np.random.default_rng(0)
-    z = rng.uniform(0.0, height, 4000)
-    r = base_radius - z * np.tan(np.radians(taper_deg))
-    a = rng.uniform(np.pi / 2, 3 * np.pi / 2, 4000)  # the half facing -x
-    nozzle = np.stack([r * np.cos(a), r * np.sin(a), z], axis=1)
-    zb, ab = rng.uniform(-0.08, -0.02, 4000), rng.uniform(np.pi / 2, 3 * np.pi / 2, 4000)
-    body = np.stack([0.03 * np.cos(ab), 0.03 * np.sin(ab), zb], axis=1)
-    return np.concatenate([nozzle, body]) + rng.normal(scale=0.0003, size=(8000, 3))
-
-
-def test_a_thin_tapered_nozzle_gripped_from_the_side_is_judged_not_held_flat():
-    """A nozzle 12 mm wide at most, narrowing 22 deg to the top, gripped from the side (the pads' lower
-    edge at its base): thinner than a wall, but gravity runs across the finger width, so it is a thin part
-    and its taper rules it out. Gripped from above, as a rim's wall is, a thin grip is held flat."""
-    side = judge_hold(make_pose(SIDE, [0, 0, 0.011]), nozzle_cloud(), eye=EYE)
-    assert side.holds is False and "narrows towards the top" in side.reason, side.reason
-    from_above = make_pose(np.array([[0, 1.0, 0], [1.0, 0, 0], [0, 0, -1.0]]), [0, 0, 0.012])  # closing along x
-    assert judge_hold(from_above, nozzle_cloud(), eye=EYE).holds is None
-

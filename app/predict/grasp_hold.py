@@ -20,9 +20,8 @@ Two tests, each from Coulomb friction with coefficient mu between pad and object
   the sides seen, exceeds `max_taper_deg` (a cap that narrows towards the top and has no lip). Coulomb
   alone would allow nearly atan(mu); the limit is lower because a flat pad meets a taper along one
   line at its lower edge, which resists no turn of a tall object in the lift and the carry: the limit
-  is measured in the simulated cell (docs/grasp-hold.md). A grip thinner than `min_width` taken from
-  above (a rim's wall) is not a wedge and is not judged; taken from the side, with gravity across the
-  finger width, it is a thin part (a nozzle) and is judged.
+  is measured in the simulated cell (docs/grasp-hold.md). A grip thinner than `min_width` (a rim's
+  wall) is not a wedge and is not judged for taper.
 
 Too few points to judge leaves the grasp unjudged (`holds` None): a single view often hides one side.
 Nothing seen between the fingers, with all that lies beside them (along the finger width) below
@@ -55,8 +54,7 @@ class HoldConfig:
     patch_depth: float = 0.004  # m: bins of the ridge this close to the outermost one are the pad's patch
     min_cells: int = 4  # fewer points on a side: that side is not judged
     seen_side: float = -0.3  # a side whose pad faces away from the camera beyond this cosine is hidden
-    min_width: float = 0.012  # m: a thinner grip from above (a rim's wall) is held flat between the pads and not
-    # judged; from the side (`across_the_width`) it is a thin part, judged as any other
+    min_width: float = 0.012  # m: a thinner grip (a rim's wall) is held flat between the pads and not judged
     moves: tuple[float, ...] = (0.01, 0.02, 0.03, 0.04, 0.05)  # m: a grasp that would slide out, or lies near
     # one that slipped, is tried this far down its pad plane
     slip_away: float = 0.03  # m: after a slip, grasps this close to the slipped one are not tried again
@@ -121,7 +119,7 @@ def judge_hold(T_base_tcp: np.ndarray, cloud: np.ndarray, config: HoldConfig = H
     if len(p) < 2 * config.min_cells:
         return Hold(None, reason="too few points between the fingers to judge the hold")
     p = p[nearest_layer(p[:, 1])]  # what the fingers close on: a mug's far wall across its cavity is not held
-    if np.ptp(p[:, 1]) < config.min_width and not across_the_width(T_base_tcp, config, up):
+    if np.ptp(p[:, 1]) < config.min_width:
         return Hold(None, reason=f"a grip {1000 * np.ptp(p[:, 1]):.0f} mm thick (a wall): held flat, not judged")
     height = grip_height(p, T_base_tcp, config, geometry, up)
     if height is not None and height < config.min_grip_height:
@@ -149,13 +147,6 @@ def judge_hold(T_base_tcp: np.ndarray, cloud: np.ndarray, config: HoldConfig = H
         return Hold(False, taper, cone, f"the surface under the pads narrows towards the top by {taper:.0f} deg "
                                         f"(more than {config.max_taper_deg:.0f}): it would slide out of the fingers")
     return Hold(True, taper, cone, "holds: antipodal contacts, no taper that slides out")
-
-
-def across_the_width(T_base_tcp: np.ndarray, config: HoldConfig, up: np.ndarray = UP) -> bool:
-    """Whether gravity runs across the finger width (x) more than along the fingers (z): a side grasp. A
-    thin grip so held is a thin part - a cap's nozzle, a pump's stem - not a rim's wall held from above."""
-    u = up_in_pad_plane(T_base_tcp, up)  # (3,) TCP frame
-    return bool(np.linalg.norm(u) >= config.min_gravity and abs(u[0]) > abs(u[2]))
 
 
 def grip_height(p: np.ndarray, T_base_tcp: np.ndarray, config: HoldConfig,
