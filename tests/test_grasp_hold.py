@@ -158,3 +158,14 @@ def test_a_rim_grasp_whose_rim_is_hidden_is_not_called_empty():
     cloud = cloud[~swept_mask(T, cloud)]  # nothing between the fingers seen
     held = judge_hold(T, cloud)
     assert held.holds is None, held.reason
+
+
+def test_a_grasp_on_a_cap_s_top_edge_is_ruled_out_and_moved_down_onto_more_of_it():
+    """The pads' lower edge 2 mm below a straight cap's top: they would hold its top edge alone (less than
+    `min_grip_height`); 10 mm lower they hold 12 mm of it, and that holds."""
+    mesh, sem = tapered_bottle({"cap_taper_deg": 0.0})
+    T = make_pose(SIDE, [0, 0, sem.height + 0.009])  # the pads span 22 mm across the height
+    judged = judge_hold(T, seen_cloud(mesh), eye=EYE)
+    assert judged.holds is False and "only the top" in judged.reason, judged.reason  # 2 mm, and the depth noise
+    kept, ruled = holding([Candidate(T, np.eye(4), np.eye(4))], seen_cloud(mesh), EYE, HoldConfig(), [])
+    assert len(kept) == 1 and not ruled and np.isclose(kept[0].T_base_tcp[2, 3], T[2, 3] - 0.01)
