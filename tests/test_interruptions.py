@@ -26,7 +26,8 @@ def nift_process(*args: str, cwd: Path) -> subprocess.Popen:
 
 def kill_after(proc: subprocess.Popen, seconds: float) -> bool:
     """SIGKILL the process after `seconds` unless it ended first; whether it was killed. Every process
-    it had started (Ray's servers, agents and workers included) is gone 15 s later."""
+    it had started (Ray's servers, agents and workers included) is gone 30 s later (a wait that allows for
+    two cores loaded by the rest of the suite)."""
     try:
         proc.wait(seconds)
         return False
@@ -37,11 +38,20 @@ def kill_after(proc: subprocess.Popen, seconds: float) -> bool:
             descendants = []
         proc.send_signal(signal.SIGKILL)
         proc.wait()
-        alive = [p for p in psutil.wait_procs(descendants, timeout=15)[1] if running(p)]
+        alive = [p for p in psutil.wait_procs(descendants, timeout=30)[1] if running(p)]
+        names = [name(p) for p in alive]
         for p in alive:
             p.kill()  # the test's own clean-up
-        assert not alive, [p.cmdline()[:3] for p in alive]
+        assert not alive, names
         return True
+
+
+def name(p: psutil.Process) -> list[str] | str:
+    """The process's command line's start, or what became of it (it may end while it is asked)."""
+    try:
+        return p.cmdline()[:3]
+    except psutil.Error as exc:
+        return f"pid {p.pid}: {type(exc).__name__}"
 
 
 def running(p: psutil.Process) -> bool:
