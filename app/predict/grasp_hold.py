@@ -134,11 +134,10 @@ def judge_hold(T_base_tcp: np.ndarray, cloud: np.ndarray, config: HoldConfig = H
     normals = {s: n for s, n in normals.items() if n is not None}
     if not normals:
         return Hold(None, reason="no pad's contact patch is seen well enough to judge the hold")
-    u = up_in_pad_plane(T_base_tcp, up)
-    judged = np.linalg.norm(u) >= config.min_gravity
-    u = u / max(np.linalg.norm(u), 1e-12)
+    u = pad_up(T_base_tcp, config, up)
     cone = max(np.degrees(np.arccos(min(1.0, abs(n[1])))) for n in normals.values())
-    taper = float(np.mean([np.degrees(np.arcsin(np.clip(n @ u, -1, 1))) for n in normals.values()])) if judged else 0.0
+    tilts = [np.degrees(np.arcsin(np.clip(n @ u, -1, 1))) for n in normals.values()] if u is not None else [0.0]
+    taper = float(np.mean(tilts))
     limit = np.degrees(np.arctan(config.friction))
     if cone > limit:
         return Hold(False, taper, cone, f"the pads' contacts are not antipodal: a contact normal is {cone:.0f} deg "
@@ -154,10 +153,9 @@ def grip_height(p: np.ndarray, T_base_tcp: np.ndarray, config: HoldConfig,
     """How far (m) the material between the pads (`p`, (K, 3) TCP frame) reaches above the pads' lowest
     point, against gravity: max_k p_k . u - min_pad c . u over the pad's corners c; None when gravity runs
     along the closing axis."""
-    u = up_in_pad_plane(T_base_tcp, up)  # (3,) TCP frame
-    if np.linalg.norm(u) < config.min_gravity:
+    u = pad_up(T_base_tcp, config, up)
+    if u is None:
         return None
-    u = u / np.linalg.norm(u)
     z0 = geometry.palm[2] - geometry.tcp_z  # the pad from the palm (z0) to the fingertips (z1), TCP frame
     z1 = z0 + geometry.finger[2]
     lowest = -geometry.finger[0] / 2 * abs(u[0]) + min(z0 * u[2], z1 * u[2])
@@ -170,14 +168,22 @@ def above_the_top(T_base_tcp: np.ndarray, cloud: np.ndarray, config: HoldConfig,
     all below the TCP, gravity running in the pad plane: a grasp above the object's top. (Where the
     surface under a rim grasp is hidden from the camera, the rim beside it shows at the fingers'
     height, and this is False.)"""
-    u = up_in_pad_plane(T_base_tcp, up)  # (3,) TCP frame
-    if np.linalg.norm(u) < config.min_gravity:
+    u = pad_up(T_base_tcp, config, up)
+    if u is None:
         return False
     near = np.asarray(cloud, float).reshape(-1, 3)[swept_mask(T_base_tcp, cloud, geometry, config.beside)]
     if len(near) < config.min_cells:
         return False
-    heights = (near - T_base_tcp[:3, 3]) @ (T_base_tcp[:3, :3] @ (u / np.linalg.norm(u)))  # (K,) m along up
+    heights = (near - T_base_tcp[:3, 3]) @ (T_base_tcp[:3, :3] @ u)  # (K,) m along up
     return bool(np.all(heights < 0.0))
+
+
+def pad_up(T_base_tcp: np.ndarray, config: HoldConfig, up: np.ndarray = UP) -> np.ndarray | None:
+    """(3,) the unit direction against gravity in the pad plane, TCP frame; None when gravity runs along the
+    closing axis (`min_gravity`): then there is no up or down on the pads."""
+    u = up_in_pad_plane(T_base_tcp, up)
+    norm = np.linalg.norm(u)
+    return None if norm < config.min_gravity else u / norm
 
 
 def up_in_pad_plane(T_base_tcp: np.ndarray, up: np.ndarray = UP) -> np.ndarray:
